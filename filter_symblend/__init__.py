@@ -1,0 +1,21 @@
+"""filter_symblend: symmetrize meshes from landmark pairs, as a pymeshlab filter.
+
+Implements Ghosh, Amenta and Kazhdan, *Closed-form Blending of Local
+Symmetries* (SGP 2010). Importing the package binds
+``pymeshlab.MeshSet.generate_symmetrized_mesh``.
+"""
+
+from .errors import (GeometryError, LandmarkError, MeshSetError, ParameterError, SymblendError,
+                     SymblendWarning)
+from .meshset_filter import (ASYMMETRY_ATTRIBUTE, DISPLAY_NAME, FILTER_NAME, bind_to_meshset,
+                             generate_symmetrized_mesh)
+from .parameters import PARAMETERS
+from .symmetrize import SymmetrizationResult, symmetrize
+
+bind_to_meshset()
+
+__all__ = [
+    "ASYMMETRY_ATTRIBUTE", "DISPLAY_NAME", "FILTER_NAME", "PARAMETERS", "GeometryError",
+    "LandmarkError", "MeshSetError", "ParameterError", "SymblendError", "SymblendWarning",
+    "SymmetrizationResult", "generate_symmetrized_mesh", "symmetrize",
+]

@@ -1,0 +1,25 @@
+"""The classical yardstick: mirror averaging (Procrustes average of the landmark
+configuration with its reflected, relabelled copy), then the same warp.
+
+This is what geometric morphometrics does today (e.g. Morpho's symmetrize); it
+makes the landmarks symmetric but undoes neither compression nor bending.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .asymmetry import fit_mirror_plane
+from .warp import thin_plate_spline_warp
+
+
+def mirror_average(points: np.ndarray, left: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """``points`` (N, 3) warped so that each left landmark becomes the mean of itself and its
+    partner's mirror image across the configuration's best mirror plane."""
+    p, q = points[left], points[right]
+    plane = fit_mirror_plane(p, q)
+    r = 0.5 * (p + plane.reflect(q))
+    target = np.vstack([r, plane.reflect(r)])
+    warped = thin_plate_spline_warp(np.vstack([p, q]), target, points)
+    warped[left], warped[right] = target[: len(left)], target[len(left):]
+    return warped

@@ -1,0 +1,86 @@
+"""Batched 3x3 linear algebra used by every step: rotations, rigid fits, mirror fits.
+
+All functions take stacks of vectors/matrices with a leading batch axis and
+loop over nothing in Python.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+MIRROR_X = np.diag([-1.0, 1.0, 1.0])
+
+
+def normalize(vectors: np.ndarray) -> np.ndarray:
+    """Unit vectors of ``vectors`` (..., 3); zero vectors stay zero."""
+    norms = np.linalg.norm(vectors, axis=-1, keepdims=True)
+    return np.divide(vectors, norms, out=np.zeros_like(vectors), where=norms > 0)
+
+
+def cross_matrix(axis: np.ndarray) -> np.ndarray:
+    """Skew matrices [a]x (n, 3, 3) of the axes ``axis`` (n, 3)."""
+    zero = np.zeros(len(axis))
+    a0, a1, a2 = axis.T
+    return np.stack(
+        [zero, -a2, a1, a2, zero, -a0, -a1, a0, zero], axis=-1
+    ).reshape(-1, 3, 3)
+
+
+def rotation_about_axis(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Rodrigues rotations (n, 3, 3) by ``angle`` (n,) radians about unit ``axis`` (n, 3)."""
+    k = cross_matrix(axis)
+    s = np.sin(angle)[:, None, None]
+    c = np.cos(angle)[:, None, None]
+    return np.eye(3) + s * k + (1.0 - c) * (k @ k)
+
+
+def minimal_rotation(sources: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """Smallest rotations (n, 3, 3) taking unit vectors ``sources`` (n, 3) to unit ``target`` (3,).
+
+    The rotation is about ``source x target``; an exactly opposite source is
+    turned by pi about an axis perpendicular to the target.
+    """
+    sources = np.atleast_2d(sources)
+    axis = np.cross(sources, target)
+    sin = np.linalg.norm(axis, axis=1)
+    cos = sources @ target
+    angle = np.arctan2(sin, cos)
+    fallback = np.cross(target, np.eye(3)[np.argmin(np.abs(target))])
+    axis = np.where((sin > 1e-15)[:, None], axis, fallback)
+    return rotation_about_axis(normalize(axis), angle)
+
+
+def proper_rotation_fit(cross_covariance: np.ndarray) -> np.ndarray:
+    """Kabsch: rotations R (n, 3, 3) maximising trace(R^T H) for H = sum w b a^T (n, 3, 3).
+
+    R is then the best proper rotation with b ~ R a (det R = +1 enforced).
+    """
+    u, _, vt = np.linalg.svd(cross_covariance)
+    d = np.sign(np.linalg.det(u @ vt))
+    d[d == 0] = 1.0
+    return u @ (np.concatenate([np.ones((len(d), 2)), d[:, None]], axis=1)[:, :, None] * vt)
+
+
+def rigid_fit(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Best rigid motion (R (3, 3), t (3,)) with target ~ source @ R.T + t (least squares)."""
+    cs, ct = source.mean(axis=0), target.mean(axis=0)
+    h = (target - ct).T @ (source - cs)
+    rotation = proper_rotation_fit(h[None])[0]
+    return rotation, ct - rotation @ cs
+
+
+def similarity_fit(source: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """``source`` (n, 3) moved by the best similarity (rotation, scale, translation) onto ``target``."""
+    cs, ct = source.mean(axis=0), target.mean(axis=0)
+    a, b = source - cs, target - ct
+    u, s, vt = np.linalg.svd(b.T @ a)
+    d = np.ones(3)
+    d[2] = np.sign(np.linalg.det(u @ vt)) or 1.0
+    rotation = (u * d) @ vt
+    scale = (s * d).sum() / (a * a).sum()
+    return scale * a @ rotation.T + ct
+
+
+def reflection_across_plane(points: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:
+    """Mirror images of ``points`` (n, 3) across the plane {x : normal . x = offset}."""
+    return points - 2.0 * (points @ normal - offset)[:, None] * normal

@@ -1,0 +1,152 @@
+"""Landmark pairs: decoding the per-vertex pair attribute and checking pairs against a mesh.
+
+Encoding of the attribute (default name ``symblend_pair``): +k on the left
+vertex of pair k, -k on the right vertex, 0 on every other vertex; k = 1..n in
+any order, gaps allowed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .errors import GeometryError, LandmarkError
+
+MIN_PAIRS = 4
+FLAT_RATIO = 1e-6  # landmark spread below this fraction of the largest one counts as flat
+
+
+@dataclasses.dataclass(frozen=True)
+class LandmarkPairs:
+    """n pairs of vertex indices: pair ``ids[k]`` joins ``left[k]`` (+k) and ``right[k]`` (-k)."""
+
+    ids: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
+
+
+def _vertices(mask: np.ndarray, limit: int = 10) -> str:
+    found = np.flatnonzero(mask)
+    shown = ", ".join(str(v) for v in found[:limit])
+    return shown + (f" ... ({len(found)} in all)" if len(found) > limit else "")
+
+
+def pairs_from_attribute(values: np.ndarray, attribute: str) -> LandmarkPairs:
+    """Decode the pair attribute ``values`` (N,) into pairs sorted by label k."""
+    values = np.asarray(values, dtype=float)
+    if not np.isfinite(values).all():
+        raise LandmarkError(
+            f"Attribute `{attribute}` is not finite at vertex {_vertices(~np.isfinite(values))}; "
+            "set those vertices to 0 (no landmark) or to a pair label +k / -k."
+        )
+    labels = np.rint(values)
+    fractional = labels != values
+    if fractional.any():
+        v = np.flatnonzero(fractional)[0]
+        raise LandmarkError(
+            f"Attribute `{attribute}` holds {values[v]:g} at vertex {v}; pair labels are whole "
+            "numbers (+k on the left vertex, -k on the right one, 0 elsewhere)."
+        )
+    labels = labels.astype(np.int64)
+    sides = {}
+    for name, sign in (("left", 1), ("right", -1)):
+        vertices = np.flatnonzero(sign * labels > 0)
+        ids = sign * labels[vertices]
+        unique, counts = np.unique(ids, return_counts=True)
+        if (counts > 1).any():
+            k = unique[counts > 1][0]
+            raise LandmarkError(
+                f"Pair label {sign * k:+d} is used on {counts[unique == k][0]} vertices "
+                f"({_vertices(sign * labels == k)}) of attribute `{attribute}`; each label "
+                f"must appear once as +{k} and once as -{k}. Renumber the extra ones."
+            )
+        sides[name] = dict(zip(ids.tolist(), vertices.tolist()))
+    for here, there, sign in (("left", "right", 1), ("right", "left", -1)):
+        orphans = sorted(set(sides[here]) - set(sides[there]))
+        if orphans:
+            k = orphans[0]
+            raise LandmarkError(
+                f"Pair {k}: {sign * k:+d} on vertex {sides[here][k]} has no {-sign * k:+d} partner "
+                f"in attribute `{attribute}`"
+                + (f" (also unpaired: {', '.join(map(str, orphans[1:11]))})" if len(orphans) > 1 else "")
+                + f". Put {-sign * k:+d} on the {there} vertex, or set {sign * k:+d} to 0."
+            )
+    ids = np.array(sorted(sides["left"]), dtype=np.int64)
+    return LandmarkPairs(
+        ids,
+        np.array([sides["left"][k] for k in ids], dtype=np.int64),
+        np.array([sides["right"][k] for k in ids], dtype=np.int64),
+    )
+
+
+def check_points(points: np.ndarray) -> np.ndarray:
+    """``points`` as a float (N, 3) array with finite coordinates, or GeometryError."""
+    points = np.asarray(points, dtype=float)
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise GeometryError(f"Vertex coordinates must have shape (N, 3), got {points.shape}.")
+    bad = ~np.isfinite(points).all(axis=1)
+    if bad.any():
+        raise GeometryError(
+            f"Vertex coordinates are not finite (NaN or inf) at vertex {_vertices(bad)}; "
+            "remove or repair those vertices first (e.g. MeshLab's remove unreferenced / "
+            "duplicate vertices filters, or re-export the scan)."
+        )
+    return points
+
+
+def check_pairs(points: np.ndarray, pairs: LandmarkPairs) -> None:
+    """Raise LandmarkError / GeometryError unless ``pairs`` is a usable set on ``points`` (N, 3)."""
+    n = len(pairs.ids)
+    if n < MIN_PAIRS:
+        raise LandmarkError(
+            f"Found {n} landmark pair(s){' (' + ', '.join(map(str, pairs.ids)) + ')' if n else ''}; "
+            f"the filter needs at least {MIN_PAIRS} pairs, not all on one plane. Add pairs."
+        )
+    for side in (pairs.left, pairs.right):
+        outside = (side < 0) | (side >= len(points))
+        if outside.any():
+            raise LandmarkError(
+                f"Pair {pairs.ids[outside][0]} names vertex {side[outside][0]}, but the mesh "
+                f"has {len(points)} vertices (0..{len(points) - 1})."
+            )
+    same = pairs.left == pairs.right
+    if same.any():
+        k = pairs.ids[same][0]
+        raise LandmarkError(
+            f"Pair {k} pairs vertex {pairs.left[same][0]} with itself. A landmark on the "
+            "symmetry plane is not a pair; give pair k two distinct mirror-image vertices."
+        )
+    vertices = np.concatenate([pairs.left, pairs.right])
+    labels = np.concatenate([pairs.ids, -pairs.ids])
+    order = np.argsort(vertices, kind="stable")
+    repeated = np.flatnonzero(np.diff(vertices[order]) == 0)
+    if repeated.size:
+        first, second = labels[order[repeated[0]]], labels[order[repeated[0] + 1]]
+        raise LandmarkError(
+            f"Vertex {vertices[order[repeated[0]]]} is used by two landmarks ({first:+d} and "
+            f"{second:+d}); each vertex can hold one landmark."
+        )
+    positions = points[vertices]
+    close = cKDTree(positions).query_pairs(0.0, output_type="ndarray")
+    if len(close):
+        i, j = close[0]
+        what = ("its two landmarks" if abs(labels[i]) == abs(labels[j])
+                else f"landmarks {labels[i]:+d} and {labels[j]:+d}")
+        raise GeometryError(
+            f"Pair {abs(labels[i])}: {what} sit at the same position (vertices {vertices[i]} and "
+            f"{vertices[j]}). Merge duplicate vertices (meshing_remove_duplicate_vertices) "
+            "or move one landmark; a landmark on the symmetry plane is not a pair."
+        )
+    spread = np.linalg.svd(positions - positions.mean(axis=0), compute_uv=False)
+    if spread[1] <= FLAT_RATIO * spread[0]:
+        raise GeometryError(
+            "All landmarks lie (nearly) on one line; the symmetry plane and the warp are "
+            "undefined. Add pairs away from that line."
+        )
+    if spread[2] <= FLAT_RATIO * spread[0]:
+        raise GeometryError(
+            "All landmarks lie (nearly) on one plane; the 3D warp is undefined. "
+            "Add pairs off that plane."
+        )

@@ -1,0 +1,130 @@
+"""The pymeshlab face of the filter: read the pairs from the current mesh, run
+:func:`symmetrize`, add the warped mesh as one new layer.
+
+The input layer is never modified. The output is built from a copy of the
+input (so colours, UVs, textures and selection survive), its coordinates and
+quality set through MeshLab's own per-vertex function filters, then copied once
+more to drop the scratch attributes (pymeshlab cannot delete attributes; the
+copy drops custom attributes). On any failure every layer the filter added is
+deleted and the input is current again.
+"""
+
+from __future__ import annotations
+
+import inspect
+
+import pymeshlab
+
+from .errors import LandmarkError, MeshSetError
+from .landmarks import pairs_from_attribute
+from .parameters import keyword_signature, parameters_doc, validate_parameters
+from .symmetrize import symmetrize
+
+FILTER_NAME = "generate_symmetrized_mesh"
+DISPLAY_NAME = "Symmetrize: Closed-form Blending of Local Symmetries"
+ASYMMETRY_ATTRIBUTE = "symblend_asymmetry"
+_SCRATCH = ("symblend_scratch_x", "symblend_scratch_y", "symblend_scratch_z",
+            "symblend_scratch_quality")
+
+
+def _read_pair_attribute(mesh: pymeshlab.Mesh, mesh_id: int, attribute: str):
+    try:
+        return mesh.vertex_custom_scalar_attribute_array(attribute)
+    except pymeshlab.PyMeshLabException:
+        raise LandmarkError(
+            f"The current mesh (id {mesh_id}, '{mesh.label()}') has no per-vertex custom scalar "
+            f"attribute `{attribute}`. Add the pairs first: "
+            f"ms.current_mesh().add_vertex_custom_scalar_attribute(labels, '{attribute}') with "
+            "+k on the left vertex of pair k, -k on the right one and 0 elsewhere, or name "
+            "your attribute with `pair_attribute`."
+        ) from None
+
+
+def _add_output_layer(ms: pymeshlab.MeshSet, input_id: int, result, pair_values, attribute: str) -> int:
+    created = []
+    try:
+        ms.set_current_mesh(input_id)
+        label = ms.current_mesh().label()
+        ms.generate_copy_of_current_mesh()
+        created.append(ms.current_mesh_id())
+        scratch = ms.current_mesh()
+        for name, values in zip(_SCRATCH, [*result.points.T, result.asymmetry]):
+            scratch.add_vertex_custom_scalar_attribute(values, name)
+        ms.compute_coord_by_function(x=_SCRATCH[0], y=_SCRATCH[1], z=_SCRATCH[2], onselected=False)
+        ms.compute_scalar_by_function_per_vertex(q=_SCRATCH[3], onselected=False)
+        ms.generate_copy_of_current_mesh()
+        created.append(ms.current_mesh_id())
+        output = ms.current_mesh()
+        output.add_vertex_custom_scalar_attribute(result.asymmetry, ASYMMETRY_ATTRIBUTE)
+        output.add_vertex_custom_scalar_attribute(pair_values, attribute)
+        if not output.is_point_cloud():
+            ms.compute_normal_per_face()
+            ms.compute_normal_per_vertex()
+        output.set_label(f"{label}_symmetrized")
+        output_id = created[1]
+        ms.set_current_mesh(created.pop(0))
+        ms.delete_current_mesh()
+        ms.set_current_mesh(output_id)
+        return output_id
+    except BaseException:
+        for mesh_id in created:
+            ms.set_current_mesh(mesh_id)
+            ms.delete_current_mesh()
+        ms.set_current_mesh(input_id)
+        raise
+
+
+def generate_symmetrized_mesh(ms: pymeshlab.MeshSet, **params) -> dict:
+    options = validate_parameters(params)
+    if ms.mesh_number() == 0:
+        raise MeshSetError(
+            "The MeshSet has no current mesh. Load one first, e.g. ms.load_new_mesh('skull.ply')."
+        )
+    input_id = ms.current_mesh_id()
+    mesh = ms.current_mesh()
+    attribute = options.pop("pair_attribute")
+    pair_values = _read_pair_attribute(mesh, input_id, attribute)
+    pairs = pairs_from_attribute(pair_values, attribute)
+    result = symmetrize(mesh.vertex_matrix(), pairs.left, pairs.right, pairs.ids, **options)
+    output_id = _add_output_layer(ms, input_id, result, pair_values, attribute)
+    return {**result.report, "input_mesh_id": input_id, "output_mesh_id": output_id}
+
+
+generate_symmetrized_mesh.__signature__ = keyword_signature(
+    inspect.Parameter("ms", inspect.Parameter.POSITIONAL_ONLY))
+generate_symmetrized_mesh.__doc__ = f"""{DISPLAY_NAME}.
+
+Symmetrizes the current mesh from the landmark pairs in its per-vertex scalar
+attribute (Ghosh, Amenta, Kazhdan, SGP 2010) and adds the warped mesh as a new
+layer, which becomes current. Same vertices (count and order), faces, colours,
+UVs and textures as the input; per-vertex quality and the custom attribute
+``{ASYMMETRY_ATTRIBUTE}`` hold how far each vertex moved (local asymmetry, in
+mesh units, input frame); the pair attribute is carried over. The input layer
+is never modified; on error the MeshSet is left exactly as it was.
+
+Parameters
+----------
+{parameters_doc()}
+
+Returns
+-------
+dict
+    The report of :func:`filter_symblend.symmetrize` plus ``input_mesh_id`` and
+    ``output_mesh_id``.
+"""
+
+
+def _meshset_method(self, **params):
+    return generate_symmetrized_mesh(self, **params)
+
+
+_meshset_method.__name__ = FILTER_NAME
+_meshset_method.__qualname__ = f"MeshSet.{FILTER_NAME}"
+_meshset_method.__doc__ = generate_symmetrized_mesh.__doc__
+_meshset_method.__signature__ = keyword_signature(
+    inspect.Parameter("self", inspect.Parameter.POSITIONAL_ONLY))
+
+
+def bind_to_meshset() -> None:
+    """Add ``MeshSet.generate_symmetrized_mesh`` (pymeshlab binds its own filters the same way)."""
+    setattr(pymeshlab.MeshSet, FILTER_NAME, _meshset_method)

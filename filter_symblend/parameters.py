@@ -1,0 +1,164 @@
+"""The one declaration of the filter's parameters.
+
+Each parameter is declared once in ``PARAMETERS``; the Python signature, the
+keyword validation and the generated documentation all come from it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import inspect
+import math
+import re
+from typing import Any
+
+from .errors import ParameterError
+
+ATTRIBUTE_NAME_PATTERN = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+
+@dataclasses.dataclass(frozen=True)
+class Parameter:
+    """One filter parameter.
+
+    kind is "enum", "float" or "string". Floats have bounds; ``minimum_open``
+    makes the lower bound exclusive. Enums list their ``choices``.
+    ``adapter_only`` parameters are taken by the MeshSet filter, not by the
+    array-level ``symmetrize``.
+    """
+
+    name: str
+    kind: str
+    default: Any
+    label: str
+    doc: str
+    unit: str = ""
+    choices: tuple[str, ...] = ()
+    minimum: float | None = None
+    maximum: float | None = None
+    minimum_open: bool = False
+    adapter_only: bool = False  # meaningful only on a MeshSet, not to the array core
+
+    def validate(self, value: Any) -> Any:
+        """Return ``value`` converted to the parameter's type, or raise ParameterError."""
+        if self.kind == "enum":
+            if value not in self.choices:
+                raise ParameterError(
+                    f"`{self.name}` must be one of {', '.join(map(repr, self.choices))}, "
+                    f"got {value!r}."
+                )
+            return value
+        if self.kind == "string":
+            if not isinstance(value, str) or not ATTRIBUTE_NAME_PATTERN.match(value):
+                raise ParameterError(
+                    f"`{self.name}` must be an attribute name of letters, digits and "
+                    f"underscores (MeshLab expressions can only read such names), got {value!r}."
+                )
+            return value
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ParameterError(f"`{self.name}` must be a number, got {value!r}.")
+        value = float(value)
+        if not math.isfinite(value):
+            raise ParameterError(f"`{self.name}` must be finite, got {value!r}.")
+        below = value <= self.minimum if self.minimum_open else value < self.minimum
+        if below or value > self.maximum:
+            raise ParameterError(
+                f"`{self.name}` must be in {self.range_text()}, got {value!r}."
+            )
+        return value
+
+    def range_text(self) -> str:
+        """The valid range as interval notation, e.g. ``(0, 100]``."""
+        if self.kind == "enum":
+            return " | ".join(self.choices)
+        if self.kind == "string":
+            return "name of letters, digits, _"
+        left = "(" if self.minimum_open else "["
+        return f"{left}{self.minimum:g}, {self.maximum:g}]"
+
+
+PARAMETERS: tuple[Parameter, ...] = (
+    Parameter(
+        "mode", "enum", "standard", "Local symmetry model",
+        "Step 1 of the paper. 'standard': no local transform (M = I). 'affine': the "
+        "minimal local stretch that makes each neighbourhood mirror-symmetric, for "
+        "compressed and bent fossils (Sec. 3.2). 'articulated': the minimal local "
+        "rotation, for posed characters (Sec. 3.3).",
+        choices=("standard", "affine", "articulated"),
+    ),
+    Parameter(
+        "phi_width", "float", 5.0, "Global solve width (phi)",
+        "Gaussian width h of the weights phi that tie neighbouring pairs together in "
+        "the global solve, as a multiple of the mean distance from a landmark to its "
+        "nearest landmark (the paper uses 5). Too large shortens bent models; too "
+        "small disconnects the pairs.",
+        unit="x mean nearest-landmark spacing", minimum=0.5, maximum=1000.0,
+    ),
+    Parameter(
+        "theta_width", "float", 5.0, "Local transform width (theta)",
+        "Gaussian width of the neighbourhoods theta used to estimate each local "
+        "symmetry in Step 1, as a multiple of the mean nearest-landmark spacing.",
+        unit="x mean nearest-landmark spacing", minimum=0.5, maximum=1000.0,
+    ),
+    Parameter(
+        "alpha", "float", 0.01, "Pair-gap stiffness (alpha)",
+        "Weight of the terms that keep the two sides spaced apart as in the "
+        "(locally transformed) input; the paper uses 0.01.",
+        minimum=0.0, maximum=100.0, minimum_open=True,
+    ),
+    Parameter(
+        "pair_attribute", "string", "symblend_pair", "Landmark pair attribute",
+        "Per-vertex custom scalar attribute holding the pairs: +k on the left vertex "
+        "of pair k, -k on the right one, 0 elsewhere.",
+        adapter_only=True,
+    ),
+    Parameter(
+        "output_frame", "enum", "input", "Output frame",
+        "'input': the result rigidly fitted back onto the input landmarks, for "
+        "before/after comparison. 'canonical': symmetry plane x = 0, left (+k) "
+        "landmarks at x > 0, landmark centroid at y = z = 0.",
+        choices=("input", "canonical"),
+    ),
+)
+
+PARAMETERS_BY_NAME = {p.name: p for p in PARAMETERS}
+DEFAULTS = {p.name: p.default for p in PARAMETERS}
+
+
+def validate_parameters(given: dict[str, Any], adapter: bool = True) -> dict[str, Any]:
+    """Fill defaults, check every value; unknown names raise with the closest valid name.
+
+    With ``adapter=False`` only the array-level parameters are accepted.
+    """
+    accepted = [p for p in PARAMETERS if adapter or not p.adapter_only]
+    names = [p.name for p in accepted]
+    for name in given:
+        if name not in names:
+            close = difflib.get_close_matches(name, names, n=1)
+            hint = f" Did you mean `{close[0]}`?" if close else ""
+            raise ParameterError(
+                f"Unknown parameter `{name}`.{hint} Valid parameters: {', '.join(names)}."
+            )
+    return {p.name: p.validate(given.get(p.name, p.default)) for p in accepted}
+
+
+def parameters_doc(adapter: bool = True) -> str:
+    """numpy-style 'Parameters' entries, pymeshlab style: ``name : type = default``."""
+    lines = []
+    for p in PARAMETERS:
+        if p.adapter_only and not adapter:
+            continue
+        lines.append(f"{p.name} : {p.kind} = {p.default!r}")
+        unit = f" Unit: {p.unit}." if p.unit else ""
+        lines.append(f"    {p.label}. {p.doc}{unit} Valid: {p.range_text()}.")
+    return "\n".join(lines)
+
+
+def keyword_signature(*leading: inspect.Parameter, adapter: bool = True) -> inspect.Signature:
+    """A signature with ``leading`` parameters and one keyword per declared parameter."""
+    keywords = [
+        inspect.Parameter(p.name, inspect.Parameter.KEYWORD_ONLY, default=p.default)
+        for p in PARAMETERS if adapter or not p.adapter_only
+    ]
+    return inspect.Signature([*leading, *keywords])

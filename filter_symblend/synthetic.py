@@ -1,0 +1,115 @@
+"""Ground truth for tests, the demo and the benchmark: exact mirror pairs of a
+symmetric mesh, known deformations (bend, compression, articulation) and error
+measures against the undeformed mesh.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .asymmetry import fit_mirror_plane
+from .geometry import normalize, rotation_about_axis, similarity_fit
+
+
+def mirror_partners(points: np.ndarray, tolerance: float = 1e-4):
+    """Mirror partner of every vertex across the bbox mid-plane normal to x.
+
+    Returns (offset, partner): the plane is x = offset; ``partner`` (N,) holds
+    the index of each vertex's mirror image, itself for vertices on the plane,
+    -1 where none lies within ``tolerance`` x the bbox diagonal.
+    """
+    offset = 0.5 * (points[:, 0].min() + points[:, 0].max())
+    mirrored = points * [-1.0, 1.0, 1.0] + [2.0 * offset, 0.0, 0.0]
+    distance, partner = cKDTree(points).query(mirrored)
+    diagonal = np.linalg.norm(np.ptp(points, axis=0))
+    partner[distance > tolerance * diagonal] = -1
+    unique = partner[partner >= 0]
+    partner[partner >= 0] = np.where(partner[unique] == np.flatnonzero(partner >= 0), unique, -1)
+    return offset, partner
+
+
+def exactly_symmetric(points: np.ndarray, offset: float, partner: np.ndarray) -> np.ndarray:
+    """A copy of ``points`` whose partnered vertices are exact mirror images (to rounding):
+    right-side vertices are replaced by the mirror of their left partner, vertices
+    paired with themselves are put on the plane."""
+    out = points.copy()
+    index = np.arange(len(points))
+    left = (partner >= 0) & (points[:, 0] > offset) & (partner != index)
+    out[partner[left]] = points[left] * [-1.0, 1.0, 1.0] + [2.0 * offset, 0.0, 0.0]
+    out[partner == index, 0] = offset
+    return out
+
+
+def farthest_point_pairs(points: np.ndarray, offset: float, partner: np.ndarray, count: int,
+                         margin: float = 0.02):
+    """``count`` pairs (left (count,), right (count,)) spread over the surface by farthest-point
+    sampling of the left vertices at least ``margin`` x diagonal off the plane."""
+    diagonal = np.linalg.norm(np.ptp(points, axis=0))
+    candidates = np.flatnonzero((partner >= 0) & (points[:, 0] > offset + margin * diagonal))
+    if count > len(candidates):
+        raise ValueError(f"Only {len(candidates)} mirror pairs are available, {count} asked.")
+    chosen = [0]
+    distance = np.linalg.norm(points[candidates] - points[candidates[0]], axis=1)
+    for _ in range(count - 1):
+        best = int(np.argmax(distance))
+        chosen.append(best)
+        distance = np.minimum(distance, np.linalg.norm(points[candidates] - points[candidates[best]], axis=1))
+    left = candidates[chosen]
+    return left, partner[left]
+
+
+def bend(points: np.ndarray, angle: float, along: int = 2, toward: int = 0) -> np.ndarray:
+    """Bend the points sideways: the ``along`` axis is wrapped onto a circular arc in the
+    (``toward``, ``along``) plane turning by ``angle`` radians over the extent."""
+    out = points.copy()
+    centre = 0.5 * (points.min(axis=0) + points.max(axis=0))
+    length = np.ptp(points[:, along])
+    radius = length / angle
+    phase = (points[:, along] - centre[along]) / radius
+    lateral = radius - (points[:, toward] - centre[toward])
+    out[:, toward] = centre[toward] + radius - lateral * np.cos(phase)
+    out[:, along] = centre[along] + lateral * np.sin(phase)
+    return out
+
+
+def compress(points: np.ndarray, direction, factor: float, shear: float = 0.0) -> np.ndarray:
+    """Global affine map: scale by ``factor`` along unit ``direction`` (3,), plus a shear of
+    x by ``shear`` x z. Compression along the mirror normal alone keeps a shape
+    symmetric, so use an oblique direction to hide the symmetry."""
+    d = normalize(np.asarray(direction, dtype=float))
+    matrix = np.eye(3) + (factor - 1.0) * np.outer(d, d)
+    matrix[0, 2] += shear
+    centre = points.mean(axis=0)
+    return (points - centre) @ matrix.T + centre
+
+
+def rotate_region(points: np.ndarray, weights: np.ndarray, pivot, axis, angle: float) -> np.ndarray:
+    """Articulate: rotate each point about ``pivot``/``axis`` by ``angle`` x its weight in [0, 1]
+    (weight 1 on the limb, 0 on the body, a smooth ramp at the joint)."""
+    axis = normalize(np.asarray(axis, dtype=float))
+    rotations = rotation_about_axis(np.broadcast_to(axis, points.shape), angle * weights)
+    return np.einsum("nij,nj->ni", rotations, points - pivot) + pivot
+
+
+def random_rigid(points: np.ndarray, seed: int) -> np.ndarray:
+    """``points`` moved by a random rotation and a translation of about one diagonal."""
+    rng = np.random.default_rng(seed)
+    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+    q = q * np.sign(np.diag(r))
+    if np.linalg.det(q) < 0:
+        q[:, 0] = -q[:, 0]
+    return points @ q.T + rng.normal(size=3) * np.linalg.norm(np.ptp(points, axis=0))
+
+
+def shape_error(points: np.ndarray, reference: np.ndarray) -> float:
+    """RMS distance to ``reference`` (N, 3) after the best similarity alignment, / its diagonal."""
+    aligned = similarity_fit(points, reference)
+    return float(np.sqrt(np.mean(np.sum((aligned - reference) ** 2, axis=1)))
+                 / np.linalg.norm(np.ptp(reference, axis=0)))
+
+
+def symmetry_error(points: np.ndarray, left: np.ndarray, right: np.ndarray) -> float:
+    """RMS over the pairs of |left - mirror(right)| across the best mirror plane, / diagonal."""
+    deviations = fit_mirror_plane(points[left], points[right]).deviations
+    return float(np.sqrt(np.mean(deviations**2)) / np.linalg.norm(np.ptp(points, axis=0)))
