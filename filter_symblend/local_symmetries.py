@@ -139,7 +139,9 @@ def _affine(moments: _Moments, pair_ids: np.ndarray):
         raise GeometryError(
             f"The landmarks around pair(s) {_list(pair_ids[flat])} are (nearly) coplanar, so "
             "the affine mode cannot estimate a local stretch there. Increase `theta_width`, "
-            "add landmarks off that plane, or use mode='standard'."
+            "add landmarks off that plane, or use mode='standard'. A pair far from its "
+            "neighbours' partners is cut off from them and causes this too: check that it "
+            "joins the right two vertices."
         )
     root = np.sqrt(spread)
     isotropic = (frames / root[:, None, :]) @ np.swapaxes(frames, 1, 2)  # T = C^-1/2
@@ -168,7 +170,9 @@ def _articulated(moments: _Moments, pair_ids: np.ndarray):
         raise GeometryError(
             f"The landmarks around pair(s) {_list(pair_ids[collinear])} are (nearly) collinear, "
             "so the articulated mode cannot estimate a local rotation there. Increase "
-            "`theta_width` or add landmarks off that line."
+            "`theta_width` or add landmarks off that line. A pair far from its neighbours' "
+            "partners is cut off from them and causes this too: check that it joins the "
+            "right two vertices."
         )
     rotation = proper_rotation_fit(-kpq)  # V with p' ~ V(-q')
     skew = np.stack([rotation[:, 2, 1] - rotation[:, 1, 2], rotation[:, 0, 2] - rotation[:, 2, 0],

@@ -71,7 +71,9 @@ def require_connected(
         f"The landmark pairs fall apart into {count} groups at `{parameter}` = "
         f"{multiple:g}: pairs {shown} are not connected to the other "
         f"{int(np.sum(labels == main))}. Set `{parameter}` to at least {needed:.3g} "
-        f"or place pairs between the groups."
+        f"or place pairs between the groups. A pair whose two landmarks are not near its "
+        f"neighbours' landmarks on both sides (e.g. joined to the wrong vertex) is isolated "
+        f"too: check it."
     )
 
 

@@ -1,0 +1,74 @@
+"""Shared ground truth: exactly mirror-symmetric meshes and their vertex pairs."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import pathlib
+
+import numpy as np
+import pymeshlab
+import pytest
+
+from filter_symblend import synthetic
+
+SAMPLE_MESHES = pathlib.Path(pymeshlab.__file__).parent / "tests" / "sample_meshes"
+SHARED_DATA = pathlib.Path(__file__).resolve().parents[1].parent / "shared" / "data"
+
+
+@dataclasses.dataclass
+class GroundTruth:
+    """An exactly symmetric mesh: points (N, 3), faces, all mirror pairs, and landmark pairs."""
+
+    points: np.ndarray
+    faces: np.ndarray
+    all_left: np.ndarray
+    all_right: np.ndarray
+    offset: float
+    partner: np.ndarray
+
+    def landmarks(self, count: int):
+        return synthetic.farthest_point_pairs(self.points, self.offset, self.partner, count)
+
+    @property
+    def diagonal(self) -> float:
+        return float(np.linalg.norm(np.ptp(self.points, axis=0)))
+
+
+def load_ground_truth(path: os.PathLike) -> GroundTruth:
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(path))
+    mesh = ms.current_mesh()
+    raw = mesh.vertex_matrix()
+    offset, partner = synthetic.mirror_partners(raw)
+    points = synthetic.exactly_symmetric(raw, offset, partner)
+    left = np.flatnonzero((partner >= 0) & (points[:, 0] > offset))
+    return GroundTruth(points, mesh.face_matrix(), left, partner[left], offset, partner)
+
+
+@pytest.fixture(scope="session")
+def cow() -> GroundTruth:
+    return load_ground_truth(SAMPLE_MESHES / "cow.obj")
+
+
+@pytest.fixture(scope="session", params=["cow", "spot"])
+def symmetric_mesh(request) -> GroundTruth:
+    """The cow, and spot when ../shared/data is present."""
+    if request.param == "cow":
+        return load_ground_truth(SAMPLE_MESHES / "cow.obj")
+    path = SHARED_DATA / "spot.obj"
+    if not path.exists():
+        pytest.skip(f"{path} is absent (shared test data not available)")
+    return load_ground_truth(path)
+
+
+def meshset_with_pairs(points, faces, left, right, attribute="symblend_pair") -> pymeshlab.MeshSet:
+    """A MeshSet whose current mesh carries the pair attribute (+k left, -k right)."""
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=points, face_matrix=faces)
+                if faces is not None and len(faces) else pymeshlab.Mesh(vertex_matrix=points))
+    labels = np.zeros(len(points))
+    labels[left] = np.arange(1, len(left) + 1)
+    labels[right] = -np.arange(1, len(right) + 1)
+    ms.current_mesh().add_vertex_custom_scalar_attribute(labels, attribute)
+    return ms

@@ -1,0 +1,174 @@
+"""End to end on exactly symmetric meshes deformed by known maps (cow; spot when present)."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from filter_symblend import SymblendWarning, symmetrize, synthetic
+from filter_symblend.baseline import mirror_average
+from filter_symblend.geometry import reflection_across_plane, rigid_fit
+
+MODES = ["standard", "affine", "articulated"]
+
+
+def quiet_symmetrize(*args, **kwargs):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SymblendWarning)
+        return symmetrize(*args, **kwargs)
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_symmetric_input_in_a_random_pose_is_unchanged(symmetric_mesh, mode):
+    left, right = symmetric_mesh.landmarks(150)
+    posed = synthetic.random_rigid(symmetric_mesh.points, seed=11)
+    result = symmetrize(posed, left, right, mode=mode)
+    assert np.abs(result.points - posed).max() < 1e-8 * symmetric_mesh.diagonal
+    canonical = symmetrize(posed, left, right, mode=mode, output_frame="canonical").points
+    rotation, translation = rigid_fit(canonical, posed)
+    assert np.abs(canonical @ rotation.T + translation - posed).max() < 1e-8 * symmetric_mesh.diagonal
+
+
+def test_global_affine_makes_every_vertex_pair_symmetric(symmetric_mesh):
+    gt = symmetric_mesh
+    left, right = gt.landmarks(100)
+    deformed = synthetic.random_rigid(synthetic.compress(gt.points, [1, 1, 0], 0.6, shear=0.2), seed=2)
+    assert synthetic.symmetry_error(deformed, gt.all_left, gt.all_right) > 1e-2
+    result = symmetrize(deformed, left, right, mode="affine")
+    assert synthetic.symmetry_error(result.points, gt.all_left, gt.all_right) < 1e-6
+    # the output differs from the original only by an affine map that commutes with the mirror
+    out = result.points
+    homogeneous = np.column_stack([gt.points, np.ones(len(out))])
+    fit, *_ = np.linalg.lstsq(homogeneous, out, rcond=None)
+    assert np.abs(homogeneous @ fit - out).max() < 1e-6 * gt.diagonal
+
+
+@pytest.mark.parametrize("scenario", ["bend", "bend+compression"])
+def test_bent_inputs_come_back_closer_to_the_original_than_mirror_averaging(symmetric_mesh, scenario):
+    gt = symmetric_mesh
+    left, right = gt.landmarks(150)
+    deformed = synthetic.bend(gt.points, 1.2)
+    mode = "standard"
+    if scenario == "bend+compression":
+        deformed = synthetic.compress(deformed, [1, 1, 0], 0.65, shear=0.15)
+        mode = "affine"
+    deformed = synthetic.random_rigid(deformed, seed=4)
+    result = quiet_symmetrize(deformed, left, right, mode=mode)
+    ours = synthetic.shape_error(result.points, gt.points)
+    before = synthetic.shape_error(deformed, gt.points)
+    baseline = synthetic.shape_error(mirror_average(deformed, left, right), gt.points)
+    assert ours < 0.5 * before
+    assert ours < 0.8 * baseline
+    assert synthetic.symmetry_error(result.points, gt.all_left, gt.all_right) < 0.05 * synthetic.symmetry_error(
+        deformed, gt.all_left, gt.all_right)
+
+
+def test_articulated_mode_restores_a_turned_leg_and_keeps_the_legs_shape(cow):
+    points = cow.points
+    limb = np.clip((-0.15 - points[:, 1]) / 0.12, 0, 1) * (points[:, 0] > 0.05) * (points[:, 2] > 0.1) * (points[:, 2] < 0.45)
+    posed = synthetic.random_rigid(
+        synthetic.rotate_region(points, limb, pivot=[0.16, -0.15, 0.24], axis=[1, 0, 0], angle=0.6), seed=3)
+    left, right = cow.landmarks(300)
+    legs = np.flatnonzero(limb > 0.99)
+    legs = np.concatenate([legs, cow.partner[legs]])
+    before = synthetic.symmetry_error(posed, cow.all_left, cow.all_right)
+    results = {mode: quiet_symmetrize(posed, left, right, mode=mode).points for mode in ("standard", "articulated")}
+    articulated = results["articulated"]
+    assert synthetic.symmetry_error(articulated, cow.all_left, cow.all_right) < before / 10
+    leg_error = {mode: synthetic.shape_error(out[legs], points[legs]) for mode, out in results.items()}
+    baseline = synthetic.shape_error(mirror_average(posed, left, right)[legs], points[legs])
+    assert leg_error["articulated"] < 0.5 * leg_error["standard"]
+    assert leg_error["articulated"] < baseline
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_symmetrizing_twice_changes_nothing(cow, mode):
+    left, right = cow.landmarks(120)
+    deformed = synthetic.compress(synthetic.bend(cow.points, 1.0), [1, 1, 0], 0.7, shear=0.1)
+    once = quiet_symmetrize(deformed, left, right, mode=mode).points
+    twice = symmetrize(once, left, right, mode=mode).points
+    assert np.abs(twice - once).max() < 1e-8 * cow.diagonal
+
+
+@pytest.mark.parametrize("frame", ["input", "canonical"])
+def test_reported_plane_mirrors_the_output_landmarks(cow, frame):
+    left, right = cow.landmarks(100)
+    deformed = synthetic.random_rigid(synthetic.bend(cow.points, 1.0), seed=8)
+    result = quiet_symmetrize(deformed, left, right, output_frame=frame)
+    normal, offset = np.array(result.report["plane_normal"]), result.report["plane_offset"]
+    out = result.points
+    assert np.abs(reflection_across_plane(out[right], normal, offset) - out[left]).max() < 1e-12 * cow.diagonal
+    assert np.all((out[left] - out[right]) @ normal > 0), "normal points toward the left (+k) side"
+    if frame == "canonical":
+        assert normal.tolist() == [1.0, 0.0, 0.0] and offset == 0.0
+        np.testing.assert_allclose(out[np.concatenate([left, right])].mean(axis=0)[1:], 0, atol=1e-12)
+
+
+def test_asymmetry_is_the_distance_moved_in_the_input_frame(cow):
+    left, right = cow.landmarks(80)
+    deformed = synthetic.bend(cow.points, 0.8)
+    for frame in ("input", "canonical"):
+        result = quiet_symmetrize(deformed, left, right, output_frame=frame)
+        out = result.points
+        if frame == "canonical":
+            rotation, translation = rigid_fit(out[np.concatenate([left, right])],
+                                              deformed[np.concatenate([left, right])])
+            out = out @ rotation.T + translation
+        np.testing.assert_allclose(result.asymmetry, np.linalg.norm(out - deformed, axis=1), atol=1e-9)
+
+
+def test_report_holds_the_contracted_fields(cow):
+    left, right = cow.landmarks(60)
+    report = quiet_symmetrize(synthetic.bend(cow.points, 1.0), left, right, phi_width=6, theta_width=3).report
+    assert report["pair_count"] == 60
+    assert report["phi_h"] == pytest.approx(6 * report["mean_landmark_spacing"])
+    assert report["theta_h"] == pytest.approx(3 * report["mean_landmark_spacing"])
+    before, after = report["landmark_asymmetry_before"], report["landmark_asymmetry_after"]
+    assert before["max"] > before["rms"] > 1e-3 and after["max"] < 1e-12
+    assert before["rms_relative"] == pytest.approx(before["rms"] / report["diagonal"])
+    assert set(report["seconds"]) == {"neighbourhoods", "local_transforms", "global_solve", "warp", "total"}
+
+
+def test_landmark_asymmetry_matches_an_independent_reflection_measure(cow):
+    """The before value is the classical Procrustes asymmetry: best plane, then |p - mirror(q)|."""
+    left, right = cow.landmarks(50)
+    deformed = synthetic.bend(cow.points, 1.0)
+    report = quiet_symmetrize(deformed, left, right).report
+    p, q = deformed[left], deformed[right]
+    from scipy.optimize import minimize
+
+    def cost(angles):
+        normal = np.array([np.cos(angles[0]) * np.cos(angles[1]), np.sin(angles[0]) * np.cos(angles[1]),
+                           np.sin(angles[1])])
+        offset = np.mean((p + q) @ normal) / 2  # the best offset for this normal
+        return np.sum((p - reflection_across_plane(q, normal, offset)) ** 2)
+
+    best = minimize(cost, [0.0, 0.0], method="BFGS", options={"gtol": 1e-12}).fun
+    assert report["landmark_asymmetry_before"]["rms"] == pytest.approx(np.sqrt(best / len(left)), rel=1e-6)
+
+
+def test_a_grossly_mispaired_landmark_is_reported(cow):
+    left, right = cow.landmarks(60)
+    right = right.copy()
+    candidates = np.flatnonzero(cow.points[:, 0] < cow.offset - 0.1)
+    distance = np.linalg.norm(cow.points[candidates] - cow.points[right[7]], axis=1)
+    right[7] = candidates[np.argmin(np.abs(distance - 0.5 * cow.diagonal))]
+    with pytest.warns(SymblendWarning, match=r"Pair\(s\) 8 are not mirror images"):
+        symmetrize(cow.points, left, right)
+
+
+def test_a_swapped_pair_is_reported(cow):
+    left, right = cow.landmarks(100)
+    left, right = left.copy(), right.copy()
+    left[3], right[3] = right[3], left[3]
+    with pytest.warns(SymblendWarning, match=r"Pair\(s\) 4 look swapped"):
+        symmetrize(cow.points, left, right)
+
+
+def test_sound_inputs_raise_no_warning(cow):
+    left, right = cow.landmarks(150)
+    deformed = synthetic.compress(synthetic.bend(cow.points, 1.2), [1, 1, 0], 0.65, shear=0.15)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SymblendWarning)
+        for mode in MODES:
+            symmetrize(deformed, left, right, mode=mode)

@@ -1,0 +1,166 @@
+"""Step 1, Step 2 and the warp against closed-form truths and independent computations."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from filter_symblend.geometry import MIRROR_X, minimal_rotation, rotation_about_axis
+from filter_symblend.global_solve import MINUS_X, global_solve
+from filter_symblend.local_symmetries import local_symmetries
+from filter_symblend.neighbourhoods import pair_weights
+from filter_symblend.warp import thin_plate_spline_warp
+
+MODES = ["standard", "affine", "articulated"]
+
+
+def symmetric_pairs(n=40, seed=0):
+    rng = np.random.default_rng(seed)
+    left = rng.normal(size=(n, 3))
+    left[:, 0] = np.abs(left[:, 0]) + 0.3
+    return left, left @ MIRROR_X
+
+
+def full_weights(n):
+    return sp.csr_matrix(np.ones((n, n)))
+
+
+def mirror_residual(left, right, normal):
+    """max |left - mirror(right)| across the plane with ``normal`` through the centroid."""
+    centre = 0.5 * (left.mean(axis=0) + right.mean(axis=0))
+    mirrored = right - 2.0 * ((right - centre) @ normal)[:, None] * normal
+    return np.abs(left - mirrored).max()
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_symmetric_neighbourhood_needs_no_transform(mode):
+    p, q = symmetric_pairs()
+    local = local_symmetries(mode, full_weights(len(p)), p, q, np.arange(1, len(p) + 1))
+    np.testing.assert_allclose(local.left_transforms, np.broadcast_to(np.eye(3), (len(p), 3, 3)), atol=1e-12)
+    np.testing.assert_allclose(local.right_transforms, local.left_transforms, atol=1e-12)
+    np.testing.assert_allclose(local.normals, np.broadcast_to(MINUS_X, (len(p), 3)), atol=1e-12)
+
+
+def test_affine_stretch_makes_an_affine_image_exactly_symmetric():
+    p0, q0 = symmetric_pairs()
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        a = np.eye(3) + 0.3 * rng.normal(size=(3, 3))
+        p, q = p0 @ a.T, q0 @ a.T
+        local = local_symmetries("affine", full_weights(len(p)), p, q, np.arange(1, len(p) + 1))
+        s = local.left_transforms[0]
+        assert mirror_residual(p @ s.T, q @ s.T, local.normals[0]) < 1e-12
+        # the skew mirror direction recovered is A n0
+        direction = np.linalg.solve(s, local.normals[0])
+        np.testing.assert_allclose(np.cross(direction / np.linalg.norm(direction),
+                                            a @ MINUS_X / np.linalg.norm(a @ MINUS_X)), 0, atol=1e-10)
+
+
+def test_minimal_stretch_equals_a_pure_oblique_compression():
+    p0, q0 = symmetric_pairs()
+    d = np.array([1.0, 1.0, 0.0]) / np.sqrt(2)
+    compression = np.eye(3) - 0.4 * np.outer(d, d)
+    local = local_symmetries("affine", full_weights(len(p0)), p0 @ compression.T, q0 @ compression.T,
+                             np.arange(1, len(p0) + 1))
+    assert local.stretch[0] == pytest.approx(1 / 0.6, rel=1e-12)
+
+
+def test_articulated_rotation_undoes_a_rigidly_turned_side():
+    p, q0 = symmetric_pairs()
+    turn = rotation_about_axis(np.array([[0.0, 0.6, 0.8]]), np.array([0.7]))[0]
+    q = (q0 - q0.mean(axis=0)) @ turn.T + q0.mean(axis=0) + [0.1, 0.2, -0.3]
+    local = local_symmetries("articulated", full_weights(len(p)), p, q, np.arange(1, len(p) + 1))
+    z_left, z_right, axis = local.left_transforms[0], local.right_transforms[0], local.normals[0]
+    pc, qc = p - p.mean(axis=0), q - q.mean(axis=0)
+    mirror = np.eye(3) - 2 * np.outer(axis, axis)
+    np.testing.assert_allclose(pc @ z_left.T, qc @ z_right.T @ mirror.T, atol=1e-12)
+    np.testing.assert_allclose(z_left, z_right.T, atol=1e-15)
+    # minimal: each side turns by half the relative rotation (0.7 rad) at most
+    angle = np.arccos(np.clip((np.trace(z_right) - 1) / 2, -1, 1))
+    assert angle <= 0.5 * np.pi
+
+
+def test_normals_point_from_left_to_right_in_any_pose():
+    p, q = symmetric_pairs()
+    turn = rotation_about_axis(np.array([[0.3, 0.9, 0.3]]) / np.linalg.norm([0.3, 0.9, 0.3]), np.array([2.5]))[0]
+    for mode in MODES:
+        local = local_symmetries(mode, full_weights(len(p)), p @ turn.T, q @ turn.T, np.arange(1, len(p) + 1))
+        np.testing.assert_allclose(local.normals, np.broadcast_to(turn @ MINUS_X, local.normals.shape), atol=1e-10)
+
+
+def test_minimal_rotation_is_smallest_and_handles_the_opposite_vector():
+    rng = np.random.default_rng(0)
+    sources = rng.normal(size=(50, 3))
+    sources /= np.linalg.norm(sources, axis=1, keepdims=True)
+    sources[0] = -MINUS_X
+    rotations = minimal_rotation(sources, MINUS_X)
+    np.testing.assert_allclose(np.einsum("nij,nj->ni", rotations, sources), np.broadcast_to(MINUS_X, (50, 3)), atol=1e-12)
+    np.testing.assert_allclose(np.linalg.det(rotations), 1.0)
+    angles = np.arccos(np.clip((np.trace(rotations, axis1=1, axis2=2) - 1) / 2, -1, 1))
+    np.testing.assert_allclose(angles, np.arccos(np.clip(sources @ MINUS_X, -1, 1)), atol=1e-7)
+
+
+def dense_least_squares(phi, p, q, local, alpha):
+    """The paper's functional (with K in the alpha terms), solved as a dense least-squares problem."""
+    n = len(p)
+    rot = minimal_rotation(local.normals, MINUS_X)
+    rows, rhs = [], []
+    mirror = np.diag([-1.0, 1.0, 1.0])
+
+    def block(i_coeff, j_coeff, i, j, target, weight):
+        row = np.zeros((3, 3 * n))
+        row[:, 3 * i:3 * i + 3] += i_coeff
+        row[:, 3 * j:3 * j + 3] -= j_coeff
+        rows.append(np.sqrt(weight) * row)
+        rhs.append(np.sqrt(weight) * target)
+
+    dense = phi.toarray()
+    for i in range(n):
+        a_p, a_q, a_g = rot[i] @ local.left_transforms[i], rot[i] @ local.right_transforms[i], rot[i] @ local.gap_transforms[i]
+        for j in range(n):
+            w = dense[i, j]
+            if w == 0:
+                continue
+            block(np.eye(3), np.eye(3), i, j, a_p @ (p[i] - p[j]), w)
+            block(mirror, mirror, i, j, a_q @ (q[i] - q[j]), w)
+            block(np.eye(3), mirror, i, j, a_g @ (p[i] - q[j]), alpha * w)
+            block(mirror, np.eye(3), i, j, a_g @ (q[i] - p[j]), alpha * w)
+    solution = np.linalg.lstsq(np.vstack(rows), np.concatenate(rhs), rcond=None)[0]
+    return solution.reshape(n, 3)
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_global_solve_matches_dense_least_squares_of_the_functional(mode):
+    rng = np.random.default_rng(5)
+    p, q = symmetric_pairs(25, seed=2)
+    p = p + 0.2 * rng.normal(size=p.shape)
+    q = q + 0.2 * rng.normal(size=q.shape)
+    phi = pair_weights(p, q, 1.0)
+    local = local_symmetries(mode, pair_weights(p, q, 1.5), p, q, np.arange(1, 26))
+    r, s = global_solve(phi, p, q, local, alpha=0.05)
+    np.testing.assert_allclose(r, dense_least_squares(phi, p, q, local, 0.05), atol=1e-10)
+    np.testing.assert_allclose(s, r * [-1, 1, 1])
+
+
+def test_global_solve_reproduces_a_globally_affine_input_exactly():
+    p0, q0 = symmetric_pairs(30)
+    a = np.array([[0.6, 0.3, 0.1], [0.2, 1.1, -0.2], [0.1, 0.0, 0.9]])
+    p, q = p0 @ a.T, q0 @ a.T
+    phi = pair_weights(p, q, 1.0)
+    local = local_symmetries("affine", pair_weights(p, q, 2.0), p, q, np.arange(1, 31))
+    frame = minimal_rotation(local.normals[:1], MINUS_X)[0]
+    s_matrix = local.left_transforms[0]
+    from filter_symblend.symmetrize import _rotated
+    r, s = global_solve(phi, p @ frame.T, q @ frame.T, _rotated(local, frame), alpha=0.01)
+    expected = np.vstack([p, q]) @ (frame @ s_matrix).T
+    expected -= expected.mean(axis=0) * [0, 1, 1]
+    np.testing.assert_allclose(np.vstack([r, s]), expected, atol=1e-12)
+
+
+def test_thin_plate_spline_is_exact_at_landmarks_and_reproduces_affine_maps():
+    rng = np.random.default_rng(1)
+    source = rng.normal(size=(60, 3))
+    target = source + 0.1 * rng.normal(size=source.shape)
+    np.testing.assert_allclose(thin_plate_spline_warp(source, target, source), target, atol=1e-10)
+    a = np.eye(3) + 0.2 * rng.normal(size=(3, 3))
+    points = rng.normal(size=(500, 3))
+    np.testing.assert_allclose(thin_plate_spline_warp(source, source @ a.T + 1.5, points), points @ a.T + 1.5, atol=1e-10)
