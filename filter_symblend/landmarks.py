@@ -131,13 +131,13 @@ def check_pairs(points: np.ndarray, pairs: LandmarkPairs) -> None:
     positions = points[vertices]
     close = cKDTree(positions).query_pairs(0.0, output_type="ndarray")
     if len(close):
-        i, j = close[0]
-        what = ("its two landmarks" if abs(labels[i]) == abs(labels[j])
-                else f"landmarks {labels[i]:+d} and {labels[j]:+d}")
+        i, j = close[np.lexsort((close[:, 1], close[:, 0]))[0]]  # deterministic: lowest first
+        what = (f"Pair {abs(labels[i])}: its two landmarks" if abs(labels[i]) == abs(labels[j])
+                else f"Landmarks {labels[i]:+d} and {labels[j]:+d}")
         raise GeometryError(
-            f"Pair {abs(labels[i])}: {what} sit at the same position (vertices {vertices[i]} and "
-            f"{vertices[j]}). Merge duplicate vertices (meshing_remove_duplicate_vertices) "
-            "or move one landmark; a landmark on the symmetry plane is not a pair."
+            f"{what} sit at the same position (vertices {vertices[i]} and {vertices[j]}). "
+            "Merge duplicate vertices (meshing_remove_duplicate_vertices) or move one "
+            "landmark; a landmark on the symmetry plane is not a pair."
         )
     spread = np.linalg.svd(positions - positions.mean(axis=0), compute_uv=False)
     if spread[1] <= FLAT_RATIO * spread[0]:

@@ -1,0 +1,123 @@
+"""The pymeshlab face: binding, the one new layer, what it keeps, and chaining with MeshLab filters."""
+
+import inspect
+import warnings
+
+import numpy as np
+import pymeshlab
+import pytest
+
+import filter_symblend
+from filter_symblend import ASYMMETRY_ATTRIBUTE, PARAMETERS, SymblendWarning, synthetic
+
+from conftest import SAMPLE_MESHES, meshset_with_pairs
+
+
+def test_import_binds_the_filter_onto_meshset_with_the_declared_parameters():
+    method = pymeshlab.MeshSet.generate_symmetrized_mesh
+    declared = {p.name: p.default for p in PARAMETERS}
+    signature = inspect.signature(method)
+    assert {name: p.default for name, p in signature.parameters.items() if name != "self"} == declared
+    assert inspect.signature(filter_symblend.generate_symmetrized_mesh).parameters.keys() - {"ms"} == declared.keys()
+    for p in PARAMETERS:
+        assert f"{p.name} : {p.kind} = {p.default!r}" in method.__doc__
+    assert filter_symblend.DISPLAY_NAME in method.__doc__
+
+
+@pytest.fixture()
+def bent_cow_meshset(cow):
+    left, right = cow.landmarks(100)
+    deformed = synthetic.random_rigid(synthetic.bend(cow.points, 1.0), seed=1)
+    ms = meshset_with_pairs(deformed, cow.faces, left, right)
+    return ms, deformed, left, right
+
+
+def test_adds_one_current_layer_and_leaves_the_input_alone(bent_cow_meshset):
+    ms, deformed, left, right = bent_cow_meshset
+    labels = ms.current_mesh().vertex_custom_scalar_attribute_array("symblend_pair").copy()
+    report = ms.generate_symmetrized_mesh(mode="affine")
+    assert ms.mesh_number() == 2
+    assert report["input_mesh_id"] == 0 and report["output_mesh_id"] == ms.current_mesh_id() != 0
+    out, source = ms.current_mesh(), ms.mesh(0)
+    np.testing.assert_array_equal(source.vertex_matrix(), deformed)
+    np.testing.assert_array_equal(source.vertex_custom_scalar_attribute_array("symblend_pair"), labels)
+    np.testing.assert_array_equal(out.face_matrix(), source.face_matrix())
+    assert out.vertex_number() == source.vertex_number()
+    moved = np.linalg.norm(out.vertex_matrix() - deformed, axis=1)
+    np.testing.assert_allclose(out.vertex_scalar_array(), moved, atol=1e-12)
+    np.testing.assert_allclose(out.vertex_custom_scalar_attribute_array(ASYMMETRY_ATTRIBUTE), moved, atol=1e-12)
+    np.testing.assert_array_equal(out.vertex_custom_scalar_attribute_array("symblend_pair"), labels)
+    assert out.label() == f"{source.label()}_symmetrized"
+    mirrored = out.vertex_matrix()[right]
+    normal, offset = np.array(report["plane_normal"]), report["plane_offset"]
+    mirrored = mirrored - 2 * (mirrored @ normal - offset)[:, None] * normal
+    assert np.abs(mirrored - out.vertex_matrix()[left]).max() < 1e-12
+
+
+def test_output_matches_the_array_core(bent_cow_meshset):
+    ms, deformed, left, right = bent_cow_meshset
+    ms.generate_symmetrized_mesh(mode="articulated", phi_width=4, output_frame="canonical")
+    core = filter_symblend.symmetrize(deformed, left, right, mode="articulated", phi_width=4, output_frame="canonical")
+    np.testing.assert_array_equal(ms.current_mesh().vertex_matrix(), core.points)
+
+
+def test_normals_are_recomputed_for_the_warped_surface(bent_cow_meshset):
+    ms, *_ = bent_cow_meshset
+    ms.generate_symmetrized_mesh()
+    warped_normals = ms.current_mesh().vertex_normal_matrix().copy()
+    ms.compute_normal_per_vertex()
+    np.testing.assert_allclose(warped_normals, ms.current_mesh().vertex_normal_matrix(), atol=1e-12)
+
+
+def test_keeps_colours_textures_and_uvs():
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(SAMPLE_MESHES / "bunny10k_textured.obj"))
+    mesh = ms.current_mesh()
+    points = mesh.vertex_matrix()
+    offset, partner = synthetic.mirror_partners(points, tolerance=0.05)
+    left, right = synthetic.farthest_point_pairs(points, offset, partner, 30)
+    labels = np.zeros(len(points))
+    labels[left], labels[right] = np.arange(1, 31), -np.arange(1, 31)
+    mesh.add_vertex_custom_scalar_attribute(labels, "symblend_pair")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SymblendWarning)
+        ms.generate_symmetrized_mesh()
+    out, source = ms.current_mesh(), ms.mesh(0)
+    assert out.textures().keys() == source.textures().keys() and out.texture_number() == 1
+    np.testing.assert_array_equal(out.wedge_tex_coord_matrix(), source.wedge_tex_coord_matrix())
+    np.testing.assert_array_equal(out.vertex_color_matrix(), source.vertex_color_matrix())
+
+
+def test_point_clouds_work(cow):
+    left, right = cow.landmarks(60)
+    deformed = synthetic.bend(cow.points, 1.0)
+    ms = meshset_with_pairs(deformed, None, left, right)
+    assert ms.current_mesh().is_point_cloud()
+    ms.generate_symmetrized_mesh()
+    assert ms.current_mesh().is_point_cloud() and ms.current_mesh().vertex_number() == len(deformed)
+    np.testing.assert_array_equal(ms.current_mesh().vertex_matrix(),
+                                  filter_symblend.symmetrize(deformed, left, right).points)
+
+
+def test_chains_with_meshlab_hausdorff(bent_cow_meshset):
+    """MeshLab's own Hausdorff distance agrees with the filter's displacement bound."""
+    ms, *_ = bent_cow_meshset
+    report = ms.generate_symmetrized_mesh()
+    out_id = report["output_mesh_id"]
+    ms.generate_copy_of_current_mesh()  # Hausdorff overwrites the sampled mesh's quality: use a copy
+    copy_id = ms.current_mesh_id()
+    hausdorff = ms.get_hausdorff_distance(sampledmesh=copy_id, targetmesh=0, samplevert=True, sampleface=False,
+                                          maxdist=pymeshlab.PureValue(report["diagonal"]))
+    assert 0 < hausdorff["max"] <= report["vertex_displacement"]["max"] + 1e-9
+    np.testing.assert_allclose(ms.mesh(out_id).vertex_scalar_array(),
+                               ms.mesh(out_id).vertex_custom_scalar_attribute_array(ASYMMETRY_ATTRIBUTE))
+
+
+def test_function_form_equals_method_form(cow):
+    left, right = cow.landmarks(50)
+    deformed = synthetic.bend(cow.points, 0.7)
+    first = meshset_with_pairs(deformed, cow.faces, left, right)
+    second = meshset_with_pairs(deformed, cow.faces, left, right)
+    first.generate_symmetrized_mesh(alpha=0.1)
+    filter_symblend.generate_symmetrized_mesh(second, alpha=0.1)
+    np.testing.assert_array_equal(first.current_mesh().vertex_matrix(), second.current_mesh().vertex_matrix())
