@@ -113,3 +113,27 @@ def symmetry_error(points: np.ndarray, left: np.ndarray, right: np.ndarray) -> f
     """RMS over the pairs of |left - mirror(right)| across the best mirror plane, / diagonal."""
     deviations = fit_mirror_plane(points[left], points[right]).deviations
     return float(np.sqrt(np.mean(deviations**2)) / np.linalg.norm(np.ptp(points, axis=0)))
+
+
+# A front-left limb of each test mesh, in coordinates normalized to the bbox
+# (0..1 per axis): the x and z bands it occupies, the height of its joint and
+# the height over which the rotation ramps in (a soft joint, no tear).
+LIMBS = {
+    "cow": {"x": (0.58, 1.0), "z": (0.557, 0.756), "joint": 0.434, "ramp": 0.11},
+    "spot": {"x": (0.55, 1.0), "z": (0.72, 1.0), "joint": 0.2, "ramp": 0.08},
+}
+
+
+def limb_weights(points: np.ndarray, x, z, joint: float, ramp: float) -> np.ndarray:
+    """Weights (N,) in [0, 1]: 1 on the limb below the joint, 0 off it (see ``LIMBS``)."""
+    unit = (points - points.min(axis=0)) / np.ptp(points, axis=0)
+    inside = (unit[:, 0] > x[0]) & (unit[:, 0] <= x[1]) & (unit[:, 2] > z[0]) & (unit[:, 2] <= z[1])
+    return np.clip((joint - unit[:, 1]) / ramp, 0.0, 1.0) * inside
+
+
+def articulate_limb(points: np.ndarray, weights: np.ndarray, angle: float) -> np.ndarray:
+    """Swing the weighted limb by ``angle`` radians about the x axis through its joint."""
+    limb = weights > 0
+    joint_height = points[limb & (weights < 1), 1].max() if np.any(limb & (weights < 1)) else points[limb, 1].max()
+    pivot = [points[limb, 0].mean(), joint_height, points[limb, 2].mean()]
+    return rotate_region(points, weights, pivot, [1.0, 0.0, 0.0], angle)

@@ -63,20 +63,20 @@ def test_bent_inputs_come_back_closer_to_the_original_than_mirror_averaging(symm
         deformed, gt.all_left, gt.all_right)
 
 
-def test_articulated_mode_restores_a_turned_leg_and_keeps_the_legs_shape(cow):
-    points = cow.points
-    limb = np.clip((-0.15 - points[:, 1]) / 0.12, 0, 1) * (points[:, 0] > 0.05) * (points[:, 2] > 0.1) * (points[:, 2] < 0.45)
-    posed = synthetic.random_rigid(
-        synthetic.rotate_region(points, limb, pivot=[0.16, -0.15, 0.24], axis=[1, 0, 0], angle=0.6), seed=3)
-    left, right = cow.landmarks(300)
+def test_articulated_mode_restores_a_turned_leg_and_keeps_the_legs_shape(symmetric_mesh, request):
+    gt = symmetric_mesh
+    name = request.node.callspec.params["symmetric_mesh"]
+    limb = synthetic.limb_weights(gt.points, **synthetic.LIMBS[name])
+    posed = synthetic.random_rigid(synthetic.articulate_limb(gt.points, limb, 0.6), seed=3)
+    left, right = gt.landmarks(1000)
     legs = np.flatnonzero(limb > 0.99)
-    legs = np.concatenate([legs, cow.partner[legs]])
-    before = synthetic.symmetry_error(posed, cow.all_left, cow.all_right)
+    legs = np.concatenate([legs, gt.partner[legs]])
+    before = synthetic.symmetry_error(posed, gt.all_left, gt.all_right)
     results = {mode: quiet_symmetrize(posed, left, right, mode=mode).points for mode in ("standard", "articulated")}
     articulated = results["articulated"]
-    assert synthetic.symmetry_error(articulated, cow.all_left, cow.all_right) < before / 10
-    leg_error = {mode: synthetic.shape_error(out[legs], points[legs]) for mode, out in results.items()}
-    baseline = synthetic.shape_error(mirror_average(posed, left, right)[legs], points[legs])
+    assert synthetic.symmetry_error(articulated, gt.all_left, gt.all_right) < before / 10
+    leg_error = {mode: synthetic.shape_error(out[legs], gt.points[legs]) for mode, out in results.items()}
+    baseline = synthetic.shape_error(mirror_average(posed, left, right)[legs], gt.points[legs])
     assert leg_error["articulated"] < 0.5 * leg_error["standard"]
     assert leg_error["articulated"] < baseline
 
