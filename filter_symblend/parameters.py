@@ -71,7 +71,7 @@ class Parameter:
     def range_text(self) -> str:
         """The valid range as interval notation, e.g. ``(0, 100]``."""
         if self.kind == "enum":
-            return " | ".join(self.choices)
+            return ", ".join(self.choices)
         if self.kind == "string":
             return "name of letters, digits, _"
         left = "(" if self.minimum_open else "["
@@ -162,3 +162,12 @@ def keyword_signature(*leading: inspect.Parameter, adapter: bool = True) -> insp
         for p in PARAMETERS if adapter or not p.adapter_only
     ]
     return inspect.Signature([*leading, *keywords])
+
+
+def parameters_markdown() -> str:
+    """The parameter table of the README, generated from the declaration."""
+    rows = ["| parameter | default | valid | meaning |", "|---|---|---|---|"]
+    for p in PARAMETERS:
+        unit = f" Unit: {p.unit}." if p.unit else ""
+        rows.append(f"| `{p.name}` | `{p.default!r}` | {p.range_text()} | {p.label}. {p.doc}{unit} |")
+    return "\n".join(rows)

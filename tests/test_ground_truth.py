@@ -29,6 +29,16 @@ def test_symmetric_input_in_a_random_pose_is_unchanged(symmetric_mesh, mode):
     assert np.abs(canonical @ rotation.T + translation - posed).max() < 1e-8 * symmetric_mesh.diagonal
 
 
+@pytest.mark.parametrize("mode", MODES)
+def test_result_does_not_depend_on_the_input_pose(cow, mode):
+    left, right = cow.landmarks(120)
+    bent = synthetic.compress(synthetic.bend(cow.points, 1.2), [1, 1, 0], 0.7, shear=0.1)
+    outputs = [quiet_symmetrize(synthetic.random_rigid(bent, seed), left, right, mode=mode,
+                                output_frame="canonical").points for seed in (1, 2)]
+    rotation, translation = rigid_fit(outputs[0], outputs[1])
+    assert np.abs(outputs[0] @ rotation.T + translation - outputs[1]).max() < 1e-8 * cow.diagonal
+
+
 def test_global_affine_makes_every_vertex_pair_symmetric(symmetric_mesh):
     gt = symmetric_mesh
     left, right = gt.landmarks(100)
