@@ -4,6 +4,14 @@ Every error is a ``ValueError`` subclass whose message names the problem and
 the fix (which parameter, attribute, pair or vertex).
 """
 
+from collections.abc import Sequence
+
+
+def id_list(ids: Sequence, limit: int = 20) -> str:
+    """``ids`` as "3, 8, 12", cut after ``limit`` with the total: "... (57 in all)"."""
+    shown = ", ".join(str(i) for i in list(ids)[:limit])
+    return shown + (f" ... ({len(ids)} in all)" if len(ids) > limit else "")
+
 
 class SymblendError(ValueError):
     """Base class of every error filter_symblend raises for bad input."""

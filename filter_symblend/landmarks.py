@@ -12,7 +12,7 @@ import dataclasses
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .errors import GeometryError, LandmarkError
+from .errors import GeometryError, LandmarkError, id_list
 
 MIN_PAIRS = 4
 FLAT_RATIO = 1e-6  # landmark spread below this fraction of the largest one counts as flat
@@ -27,18 +27,12 @@ class LandmarkPairs:
     right: np.ndarray
 
 
-def _vertices(mask: np.ndarray, limit: int = 10) -> str:
-    found = np.flatnonzero(mask)
-    shown = ", ".join(str(v) for v in found[:limit])
-    return shown + (f" ... ({len(found)} in all)" if len(found) > limit else "")
-
-
 def pairs_from_attribute(values: np.ndarray, attribute: str) -> LandmarkPairs:
     """Decode the pair attribute ``values`` (N,) into pairs sorted by label k."""
     values = np.asarray(values, dtype=float)
     if not np.isfinite(values).all():
         raise LandmarkError(
-            f"Attribute `{attribute}` is not finite at vertex {_vertices(~np.isfinite(values))}; "
+            f"Attribute `{attribute}` is not finite at vertex {id_list(np.flatnonzero(~np.isfinite(values)))}; "
             "set those vertices to 0 (no landmark) or to a pair label +k / -k."
         )
     labels = np.rint(values)
@@ -59,7 +53,7 @@ def pairs_from_attribute(values: np.ndarray, attribute: str) -> LandmarkPairs:
             k = unique[counts > 1][0]
             raise LandmarkError(
                 f"Pair label {sign * k:+d} is used on {counts[unique == k][0]} vertices "
-                f"({_vertices(sign * labels == k)}) of attribute `{attribute}`; each label "
+                f"({id_list(np.flatnonzero(sign * labels == k))}) of attribute `{attribute}`; each label "
                 f"must appear once as +{k} and once as -{k}. Renumber the extra ones."
             )
         sides[name] = dict(zip(ids.tolist(), vertices.tolist()))
@@ -89,7 +83,7 @@ def check_points(points: np.ndarray) -> np.ndarray:
     bad = ~np.isfinite(points).all(axis=1)
     if bad.any():
         raise GeometryError(
-            f"Vertex coordinates are not finite (NaN or inf) at vertex {_vertices(bad)}; "
+            f"Vertex coordinates are not finite (NaN or inf) at vertex {id_list(np.flatnonzero(bad))}; "
             "remove or repair those vertices first (e.g. MeshLab's remove unreferenced / "
             "duplicate vertices filters, or re-export the scan)."
         )

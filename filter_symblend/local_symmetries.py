@@ -18,7 +18,7 @@ import dataclasses
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import GeometryError
+from .errors import GeometryError, id_list
 from .geometry import normalize, proper_rotation_fit, rotation_about_axis
 
 DEGENERATE_RATIO = 1e-8  # smallest/largest spread of a neighbourhood below which it has no 3D frame
@@ -137,7 +137,7 @@ def _affine(moments: _Moments, pair_ids: np.ndarray):
     flat = spread[:, 0] <= DEGENERATE_RATIO * spread[:, 2]
     if flat.any():
         raise GeometryError(
-            f"The landmarks around pair(s) {_list(pair_ids[flat])} are (nearly) coplanar, so "
+            f"The landmarks around pair(s) {id_list(pair_ids[flat])} are (nearly) coplanar, so "
             "the affine mode cannot estimate a local stretch there. Increase `theta_width`, "
             "add landmarks off that plane, or use mode='standard'. A pair far from its "
             "neighbours' partners is cut off from them and causes this too: check that it "
@@ -168,7 +168,7 @@ def _articulated(moments: _Moments, pair_ids: np.ndarray):
     collinear = singular[:, 1] <= DEGENERATE_RATIO * singular[:, 0]
     if collinear.any():
         raise GeometryError(
-            f"The landmarks around pair(s) {_list(pair_ids[collinear])} are (nearly) collinear, "
+            f"The landmarks around pair(s) {id_list(pair_ids[collinear])} are (nearly) collinear, "
             "so the articulated mode cannot estimate a local rotation there. Increase "
             "`theta_width` or add landmarks off that line. A pair far from its neighbours' "
             "partners is cut off from them and causes this too: check that it joins the "
@@ -194,11 +194,6 @@ def _articulated(moments: _Moments, pair_ids: np.ndarray):
     identity = np.broadcast_to(np.eye(3), (n, 3, 3))
     return (normals, np.swapaxes(z, 1, 2), z, identity, moments.left_mean,
             moments.right_mean, np.ones(n), point_reflection)
-
-
-def _list(ids: np.ndarray, limit: int = 20) -> str:
-    shown = ", ".join(str(k) for k in ids[:limit])
-    return shown + (f" ... ({len(ids)} in all)" if len(ids) > limit else "")
 
 
 MODELS = {"standard": _standard, "affine": _affine, "articulated": _articulated}

@@ -15,7 +15,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
-from .errors import GeometryError
+from .errors import GeometryError, id_list
 
 TRUNCATION = 3.0
 
@@ -66,10 +66,9 @@ def require_connected(
     main = np.argmax(np.bincount(labels))
     isolated = pair_ids[labels != main]
     needed = _connecting_width(left, right) / spacing
-    shown = ", ".join(str(k) for k in isolated[:20]) + (" ..." if len(isolated) > 20 else "")
     raise GeometryError(
         f"The landmark pairs fall apart into {count} groups at `{parameter}` = "
-        f"{multiple:g}: pairs {shown} are not connected to the other "
+        f"{multiple:g}: pairs {id_list(isolated)} are not connected to the other "
         f"{int(np.sum(labels == main))}. Set `{parameter}` to at least {needed:.3g} "
         f"or place pairs between the groups. A pair whose two landmarks are not near its "
         f"neighbours' landmarks on both sides (e.g. joined to the wrong vertex) is isolated "

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from .asymmetry import fit_mirror_plane
-from .errors import SymblendWarning
+from .errors import LandmarkError, SymblendWarning, id_list
 from .geometry import minimal_rotation, normalize, rigid_fit
 from .global_solve import MINUS_X, global_solve
 from .landmarks import LandmarkPairs, check_pairs, check_points
@@ -59,20 +59,20 @@ def _warn_about_local_fits(local: LocalSymmetries, left, right, ids: np.ndarray,
     swapped = cosine < SWAPPED_COSINE
     if swapped.any():
         warnings.warn(
-            f"Pair(s) {', '.join(map(str, ids[swapped][:20]))} look swapped: the +k landmark "
+            f"Pair(s) {id_list(ids[swapped])} look swapped: the +k landmark "
             "lies on the right-hand (-k) side of its local mirror plane. Exchange +k and -k.",
             SymblendWarning, stacklevel=3)
     poor = local.pair_misfits > POOR_PAIR_MISFIT
     if poor.any():
         worst = np.argmax(local.pair_misfits)
         warnings.warn(
-            f"Pair(s) {', '.join(map(str, ids[poor][:20]))} are not mirror images of each other "
+            f"Pair(s) {id_list(ids[poor])} are not mirror images of each other "
             f"under their local '{mode}' symmetry (misfit up to {local.pair_misfits[worst]:.2f} "
             f"neighbourhood radii at pair {ids[worst]}; sound pairs stay below 0.5). Check that "
             "each of them joins the right two vertices.", SymblendWarning, stacklevel=3)
     if local.point_reflections.any():
         warnings.warn(
-            f"Around pair(s) {', '.join(map(str, ids[local.point_reflections][:20]))} one side is "
+            f"Around pair(s) {id_list(ids[local.point_reflections])} one side is "
             "turned half a revolution against the other, so no local rotation axis exists; "
             "no rotation was applied there.", SymblendWarning, stacklevel=3)
 
@@ -90,7 +90,9 @@ def symmetrize(points, left, right, pair_ids=None, **params) -> SymmetrizationRe
     right = np.asarray(right, dtype=np.int64).ravel()
     ids = np.arange(1, len(left) + 1) if pair_ids is None else np.asarray(pair_ids).ravel()
     if not (len(left) == len(right) == len(ids)):
-        raise ValueError("`left`, `right` and `pair_ids` must have the same length.")
+        raise LandmarkError(
+            f"`left`, `right` and `pair_ids` must have one entry per pair; got {len(left)}, "
+            f"{len(right)} and {len(ids)}.")
     check_pairs(points, LandmarkPairs(ids, left, right))
 
     p, q = points[left], points[right]

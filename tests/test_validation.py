@@ -107,6 +107,12 @@ def test_vertex_in_two_pairs():
         symmetrize(points, left, right)
 
 
+def test_mismatched_index_arrays():
+    points, left, right = cube_pairs()
+    with pytest.raises(LandmarkError, match=r"one entry per pair; got 8, 7 and 8"):
+        symmetrize(points, left, right[:7])
+
+
 def test_vertex_index_out_of_range():
     points, left, right = cube_pairs()
     with pytest.raises(LandmarkError, match=r"Pair 1 names vertex 99, but the mesh has 16 vertices"):
