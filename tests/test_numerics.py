@@ -164,3 +164,20 @@ def test_thin_plate_spline_is_exact_at_landmarks_and_reproduces_affine_maps():
     a = np.eye(3) + 0.2 * rng.normal(size=(3, 3))
     points = rng.normal(size=(500, 3))
     np.testing.assert_allclose(thin_plate_spline_warp(source, source @ a.T + 1.5, points), points @ a.T + 1.5, atol=1e-10)
+
+
+def test_iterative_solve_equals_the_dense_one(monkeypatch):
+    """The conjugate-gradient path (large sparse systems) gives the dense Cholesky answer."""
+    import filter_symblend.global_solve as solve_module
+
+    rng = np.random.default_rng(4)
+    p, q = symmetric_pairs(300, seed=6)
+    p, q = p + 0.05 * rng.normal(size=p.shape), q + 0.05 * rng.normal(size=q.shape)
+    phi = pair_weights(p, q, 0.4)
+    local = local_symmetries("affine", pair_weights(p, q, 0.8), p, q, np.arange(1, 301))
+    dense = global_solve(phi, p, q, local, alpha=0.01)
+    monkeypatch.setattr(solve_module, "DENSE_SIZE", 10)
+    monkeypatch.setattr(solve_module, "DENSE_FRACTION", 1.1)
+    iterative = global_solve(phi, p, q, local, alpha=0.01)
+    assert phi.nnz < 0.5 * 300 * 300, "the test must exercise a sparse system"
+    np.testing.assert_allclose(iterative[0], dense[0], atol=1e-10)
