@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
 from filter_symblend.geometry import MIRROR_X, minimal_rotation, rotation_about_axis
 from filter_symblend.global_solve import MINUS_X, global_solve
@@ -173,7 +174,8 @@ def test_iterative_solve_equals_the_dense_one(monkeypatch):
     rng = np.random.default_rng(4)
     p, q = symmetric_pairs(300, seed=6)
     p, q = p + 0.05 * rng.normal(size=p.shape), q + 0.05 * rng.normal(size=q.shape)
-    phi = pair_weights(p, q, 0.4)
+    phi = pair_weights(p, q, 0.5)  # connected, a third of the pairs linked
+    assert connected_components(phi)[0] == 1
     local = local_symmetries("affine", pair_weights(p, q, 0.8), p, q, np.arange(1, 301))
     dense = global_solve(phi, p, q, local, alpha=0.01)
     monkeypatch.setattr(solve_module, "DENSE_SIZE", 10)
