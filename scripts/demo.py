@@ -19,23 +19,9 @@ import filter_symblend  # noqa: F401  (binds MeshSet.generate_symmetrized_mesh)
 from filter_symblend import synthetic
 from filter_symblend.asymmetry import fit_mirror_plane
 from filter_symblend.geometry import reflection_across_plane, similarity_fit
+from filter_symblend.hausdorff import two_way_hausdorff
 
 COW = pathlib.Path(pymeshlab.__file__).parent / "tests" / "sample_meshes" / "cow.obj"
-
-
-def two_way_hausdorff(ms: pymeshlab.MeshSet, a: int, b: int) -> float:
-    """Two-way Hausdorff distance (max of both directions) with MeshLab's filter, run on
-    copies because it overwrites the sampled mesh's quality."""
-    diagonal = ms.mesh(a).bounding_box().diagonal()
-    distances = []
-    for sampled, target in ((a, b), (b, a)):
-        ms.set_current_mesh(sampled)
-        ms.generate_copy_of_current_mesh()
-        distances.append(ms.get_hausdorff_distance(
-            sampledmesh=ms.current_mesh_id(), targetmesh=target, samplevert=True, sampleface=True,
-            maxdist=pymeshlab.PureValue(diagonal))["max"])
-        ms.delete_current_mesh()
-    return max(distances)
 
 
 def add_layer(ms: pymeshlab.MeshSet, vertices: np.ndarray, faces: np.ndarray, name: str) -> int:
@@ -80,13 +66,13 @@ def main(argv=None) -> None:
         plane = fit_mirror_plane(vertices[left], vertices[right])
         mirror_id = add_layer(ms, reflection_across_plane(vertices, plane.normal, plane.offset), faces, "mirror")
         truth_id = add_layer(ms, similarity_fit(symmetric, vertices), faces, "undeformed")
-        print(f"  {name:8} {two_way_hausdorff(ms, mesh_id, mirror_id) / diagonal:>20.2%}"
-              f" {two_way_hausdorff(ms, mesh_id, truth_id) / diagonal:>18.2%}")
+        print(f"  {name:8} {two_way_hausdorff(ms, mesh_id, mirror_id)['max'] / diagonal:>20.2%}"
+              f" {two_way_hausdorff(ms, mesh_id, truth_id)['max'] / diagonal:>18.2%}")
         for extra in (mirror_id, truth_id):
             ms.set_current_mesh(extra)
             ms.delete_current_mesh()
     print("  (truth: the undeformed cow; its tail is not symmetric in pymeshlab's model)")
-    print(f"  input <-> output: {two_way_hausdorff(ms, deformed_id, output_id) / diagonal:.2%}")
+    print(f"  input <-> output: {two_way_hausdorff(ms, deformed_id, output_id)['max'] / diagonal:.2%}")
     print("seconds: " + ", ".join(f"{k} {v:.3f}" for k, v in report["seconds"].items()))
 
     args.output.parent.mkdir(parents=True, exist_ok=True)

@@ -1,0 +1,194 @@
+"""The ``symblend`` command: symmetrize a mesh from a landmark file, check and convert landmarks.
+
+    symblend symmetrize INPUT -l LANDMARKS -o OUTPUT [--pairs PAIRS.csv] [--report REPORT.json] [filter options]
+    symblend landmarks check INPUT -l LANDMARKS [--pairs PAIRS.csv]
+    symblend landmarks convert IN OUT
+
+The filter options are generated from the filter's parameter declaration.
+Errors are one line on stderr, exit status 1; no output file is written then.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import pathlib
+import sys
+import warnings
+
+from .errors import SymblendError
+from .parameters import PARAMETERS
+
+FRAMES = ("LPS", "RAS")
+
+
+def _add_filter_options(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_argument_group("filter options (MeshSet.generate_symmetrized_mesh)")
+    for p in PARAMETERS:
+        unit = f" Unit: {p.unit}." if p.unit else ""
+        options = {"dest": p.name, "default": p.default, "metavar": p.name.upper(),
+                   "help": f"{p.label}. {p.doc}{unit} Valid: {p.range_text()}. Default: %(default)s."}
+        if p.kind == "enum":
+            options["choices"] = p.choices
+        elif p.kind == "float":
+            options["type"] = float
+        group.add_argument("--" + p.name.replace("_", "-"), **options)
+
+
+def _add_landmark_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("-l", "--landmarks", required=True, type=pathlib.Path,
+                        help="landmark file: .pp, .fcsv, .mrk.json, .pts or .csv")
+    parser.add_argument("--pairs", type=pathlib.Path,
+                        help="pair table: two-column CSV of landmark names or 1-based numbers (left, right); "
+                             "default: pair by name (L_/R_ prefixes, _left/_right suffixes, any case)")
+    parser.add_argument("--mesh-frame", choices=FRAMES, default="LPS",
+                        help="coordinate system of the mesh, used only when the landmark file states one "
+                             "(Slicer files); default: %(default)s, as Slicer saves models")
+
+
+def _load_mesh(path: pathlib.Path):
+    import pymeshlab
+
+    if not path.is_file():
+        raise SymblendError(f"{path}: no such mesh file.")
+    from .ply_attributes import load_mesh_with_attributes
+
+    ms = pymeshlab.MeshSet()
+    try:
+        load_mesh_with_attributes(ms, path)
+    except pymeshlab.PyMeshLabException as error:
+        raise SymblendError(f"{path}: pymeshlab cannot read it ({error}).") from None
+    return ms
+
+
+def _snapped_pairs(ms, args):
+    from .landmark_files import read_landmarks
+    from .pairing import pair_by_name, read_pair_table, snap_pairs
+
+    landmarks, frame_note = read_landmarks(args.landmarks).in_frame(args.mesh_frame)
+    names = landmarks.names()
+    if args.pairs:
+        index_pairs = read_pair_table(args.pairs, names)
+        paired = {i for pair in index_pairs for i in pair}
+        unpaired = [i for i in range(len(names)) if i not in paired]
+    else:
+        index_pairs, unpaired = pair_by_name(names)
+    snapped = snap_pairs(ms.current_mesh().vertex_matrix(), landmarks, index_pairs, unpaired,
+                         source=str(args.landmarks))
+    return snapped, frame_note
+
+
+def _save_atomically(ms, output: pathlib.Path, attributes: list[str]) -> None:
+    """Save the current mesh to a temporary name beside ``output``, then rename it."""
+    temporary = output.with_name(f".{output.stem}.symblend-partial{output.suffix}")
+    options = {}
+    if output.suffix.lower() == ".ply":
+        options = {"save_vertex_quality": True, **{f"__ca_vs__{name.lower()}": True for name in attributes}}
+    import pymeshlab
+
+    try:
+        ms.save_current_mesh(str(temporary), **options)
+        os.replace(temporary, output)
+    except pymeshlab.PyMeshLabException as error:
+        raise SymblendError(f"{output}: pymeshlab cannot write it ({error}).") from None
+    finally:
+        temporary.unlink(missing_ok=True)
+
+
+def _symmetrize(args) -> int:
+    from .hausdorff import two_way_hausdorff
+    from .meshset_filter import ASYMMETRY_ATTRIBUTE, generate_symmetrized_mesh
+    from .pairing import pair_labels
+
+    params = {p.name: getattr(args, p.name) for p in PARAMETERS}
+    ms = _load_mesh(args.input)
+    snapped, frame_note = _snapped_pairs(ms, args)
+    mesh = ms.current_mesh()
+    mesh.add_vertex_custom_scalar_attribute(pair_labels(mesh.vertex_number(), snapped.pairs),
+                                            params["pair_attribute"])
+    report = generate_symmetrized_mesh(ms, **params)
+    report["hausdorff_input_output"] = two_way_hausdorff(ms, report["input_mesh_id"], report["output_mesh_id"])
+    report["landmarks"] = {"file": str(args.landmarks), "frame": frame_note,
+                           "pairs": [list(p) for p in snapped.pair_names],
+                           "snap_distance_max": float(snapped.snap_distances.max()),
+                           "left_out_unplaced": snapped.unplaced}
+    _save_atomically(ms, args.output, [ASYMMETRY_ATTRIBUTE, params["pair_attribute"]])
+    if args.report:
+        args.report.write_text(json.dumps(report, indent=2) + "\n")
+    before, after = report["landmark_asymmetry_before"], report["landmark_asymmetry_after"]
+    print(f"{args.output}: {report['pair_count']} pairs, mode {report['mode']}; landmark asymmetry RMS "
+          f"{before['rms_relative']:.2%} -> {after['rms_relative']:.1e} of the diagonal; two-way Hausdorff "
+          f"input<->output {report['hausdorff_input_output']['max']:.4g}")
+    return 0
+
+
+def _check(args) -> int:
+    from .landmarks import check_pairs
+
+    ms = _load_mesh(args.input)
+    snapped, frame_note = _snapped_pairs(ms, args)
+    print(f"{args.landmarks}: {frame_note}; {len(snapped.pair_names)} pairs")
+    for k, ((left, right), distance) in enumerate(zip(snapped.pair_names, snapped.snap_distances), start=1):
+        print(f"  {k:3d}  {left} -> vertex {snapped.pairs.left[k - 1]} (snap {distance[0]:.3g})   "
+              f"{right} -> vertex {snapped.pairs.right[k - 1]} (snap {distance[1]:.3g})")
+    if snapped.unplaced:
+        print(f"left out (not placed): {', '.join(snapped.unplaced)}")
+    check_pairs(ms.current_mesh().vertex_matrix(), snapped.pairs)
+    print("ok: the pairs can be symmetrized")
+    return 0
+
+
+def _convert(args) -> int:
+    from .landmark_files import read_landmarks, write_landmarks
+
+    write_landmarks(args.output, read_landmarks(args.input))
+    print(f"{args.input} -> {args.output}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="symblend", description=__doc__.split("\n\n")[0])
+    commands = parser.add_subparsers(dest="command", required=True)
+    run = commands.add_parser("symmetrize", help="symmetrize a mesh from landmark pairs")
+    run.add_argument("input", type=pathlib.Path, help="mesh file (any format pymeshlab reads)")
+    _add_landmark_options(run)
+    run.add_argument("-o", "--output", required=True, type=pathlib.Path,
+                     help="output mesh; .ply keeps quality (local asymmetry) and the attributes")
+    run.add_argument("--report", type=pathlib.Path, help="write the filter's report, plus Hausdorff, as JSON")
+    _add_filter_options(run)
+    run.set_defaults(handler=_symmetrize)
+
+    landmarks = commands.add_parser("landmarks", help="check or convert landmark files")
+    sub = landmarks.add_subparsers(dest="landmarks_command", required=True)
+    check = sub.add_parser("check", help="list pairs and snap distances; report problems")
+    check.add_argument("input", type=pathlib.Path, help="mesh file")
+    _add_landmark_options(check)
+    check.set_defaults(handler=_check)
+    convert = sub.add_parser("convert", help="convert between .pp, .fcsv, .mrk.json, .pts, .csv")
+    convert.add_argument("input", type=pathlib.Path)
+    convert.add_argument("output", type=pathlib.Path)
+    convert.set_defaults(handler=_convert)
+    return parser
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("always")
+            warnings.showwarning = lambda message, *rest: print(f"symblend: warning: {message}", file=sys.stderr)
+            return args.handler(args)
+    except SymblendError as error:
+        print(f"symblend: error: {error}", file=sys.stderr)
+        return 1
+    except OSError as error:
+        print(f"symblend: error: {error.filename}: {error.strerror}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("symblend: interrupted; no output written", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,147 @@
+"""From named landmarks to vertex pairs: pair by name or by a pair table, snap to vertices.
+
+Name rule (default): a name pairs with another when they differ only by a side
+word at the start or the end, any case, separated by "_", "-", "." or a space:
+"L_orbitale" / "R_orbitale", "orbitale-left" / "Orbitale Right". A pair table
+(Morpho's ``pairedLM``, geomorph's ``land.pairs``) is a two-column CSV of names
+or 1-based landmark numbers, left column first.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import pathlib
+import re
+import warnings
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .errors import LandmarkError, SymblendWarning
+from .landmark_files import LandmarkFileError, LandmarkSet
+from .landmarks import LandmarkPairs
+
+LEFT_WORDS = ("l", "left", "lt")
+RIGHT_WORDS = ("r", "right", "rt")
+FAR_FROM_SURFACE = 0.02  # snap distance, as a fraction of the bbox diagonal, that is reported
+_SEPARATORS = re.compile(r"[_\-.\s]+")
+
+
+def _side_and_base(name: str, left_words, right_words):
+    tokens = [t for t in _SEPARATORS.split(name.strip().lower()) if t]
+    for side, words in (("left", left_words), ("right", right_words)):
+        for position in (0, -1):
+            if len(tokens) > 1 and tokens[position] in words:
+                rest = tokens[1:] if position == 0 else tokens[:-1]
+                return side, "_".join(rest)
+    return None, "_".join(tokens)
+
+
+def pair_by_name(names: list[str], left_words=LEFT_WORDS, right_words=RIGHT_WORDS):
+    """Index pairs [(left, right)] by the name rule, and the indices of unpaired names."""
+    sides: dict[str, dict[str, int]] = {"left": {}, "right": {}}
+    unpaired = []
+    for index, name in enumerate(names):
+        side, base = _side_and_base(name, left_words, right_words)
+        if side is None:
+            unpaired.append(index)
+            continue
+        if base in sides[side]:
+            raise LandmarkError(f"Landmarks {names[sides[side][base]]!r} and {name!r} are both the {side} "
+                                f"'{base}'; rename one.")
+        sides[side][base] = index
+    pairs = [(sides["left"][b], sides["right"][b]) for b in sides["left"] if b in sides["right"]]
+    paired = {i for pair in pairs for i in pair}
+    unpaired += [i for side in sides.values() for i in side.values() if i not in paired]
+    return pairs, sorted(unpaired)
+
+
+def read_pair_table(path, names: list[str]):
+    """Index pairs [(left, right)] from a two-column CSV of landmark names or 1-based numbers."""
+    path = pathlib.Path(path)
+    try:
+        rows = [r for r in csv.reader(path.read_text(encoding="utf-8-sig").splitlines()) if r]
+    except OSError as error:
+        raise LandmarkFileError(f"{path}: cannot be read ({error.strerror}).") from None
+    lookup = {name: i for i, name in enumerate(names)}
+    pairs = []
+    for number, row in enumerate(rows, start=1):
+        if len(row) < 2:
+            raise LandmarkFileError(f"{path}, line {number}: expected two columns (left, right).")
+        cells = [c.strip() for c in row[:2]]
+        if all(c.isdigit() for c in cells):
+            indices = [int(c) - 1 for c in cells]
+            bad = [c for c, i in zip(cells, indices) if not 0 <= i < len(names)]
+            if bad:
+                raise LandmarkFileError(f"{path}, line {number}: landmark number {bad[0]} does not exist "
+                                        f"(the landmark file has {len(names)}, numbered from 1).")
+        elif all(c in lookup for c in cells):
+            indices = [lookup[c] for c in cells]
+        elif number == 1:
+            continue  # a header row
+        else:
+            missing = next(c for c in cells if c not in lookup)
+            raise LandmarkFileError(f"{path}, line {number}: no landmark is named {missing!r}.")
+        pairs.append(tuple(indices))
+    return pairs
+
+
+@dataclasses.dataclass
+class SnappedPairs:
+    """Landmark pairs on mesh vertices, with what was done to get there."""
+
+    pairs: LandmarkPairs
+    pair_names: list[tuple[str, str]]
+    snap_distances: np.ndarray  # (n, 2), mesh units
+    unplaced: list[str]
+
+
+def snap_pairs(points: np.ndarray, landmarks: LandmarkSet, index_pairs, unpaired: list[int],
+               source: str = "landmarks") -> SnappedPairs:
+    """Snap both landmarks of every pair to their nearest vertex of ``points`` (N, 3).
+
+    Pairs with an unplaced side are left out (and listed); unpaired landmarks are
+    an error that lists them; two landmarks on one vertex are an error naming both.
+    """
+    names = landmarks.names()
+    if unpaired:
+        listed = ", ".join(repr(names[i]) for i in unpaired[:20])
+        raise LandmarkError(
+            f"{source}: {len(unpaired)} landmark(s) have no partner: {listed}. Name them with a side "
+            "(L_/R_ prefix or _left/_right suffix), list them in a pair table (--pairs), or remove "
+            "them (midline landmarks are not supported yet).")
+    placed = [(a, b) for a, b in index_pairs if landmarks.landmarks[a].placed and landmarks.landmarks[b].placed]
+    unplaced = [f"{names[a]}/{names[b]}" for a, b in index_pairs if (a, b) not in placed]
+    if unplaced:
+        warnings.warn(f"{source}: pair(s) {', '.join(unplaced)} have a landmark marked as not placed and "
+                      "are left out.", SymblendWarning, stacklevel=2)
+    positions = np.array([[landmarks.landmarks[i].position for i in pair] for pair in placed], dtype=float)
+    distances, vertices = cKDTree(points).query(positions.reshape(-1, 3))
+    vertices, distances = vertices.reshape(-1, 2), distances.reshape(-1, 2)
+    flat = vertices.ravel()
+    order = np.argsort(flat, kind="stable")
+    same = np.flatnonzero(np.diff(flat[order]) == 0)
+    if same.size:
+        a, b = order[same[0]], order[same[0] + 1]
+        first, second = names[placed[a // 2][a % 2]], names[placed[b // 2][b % 2]]
+        raise LandmarkError(f"{source}: landmarks {first!r} and {second!r} both snap to vertex {flat[a]}; "
+                            "move one of them, or use a finer mesh.")
+    diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
+    far = distances.max(axis=1) > FAR_FROM_SURFACE * diagonal
+    if far.any():
+        shown = ", ".join(f"{names[placed[i][0]]}/{names[placed[i][1]]} ({distances[i].max():.3g})"
+                          for i in np.flatnonzero(far)[:10])
+        warnings.warn(f"{source}: pair(s) {shown} lie far from the mesh surface (more than "
+                      f"{FAR_FROM_SURFACE:.0%} of the diagonal); check the file's coordinate system "
+                      "(--mesh-frame) and units.", SymblendWarning, stacklevel=2)
+    ids = np.arange(1, len(placed) + 1)
+    return SnappedPairs(LandmarkPairs(ids, vertices[:, 0], vertices[:, 1]),
+                        [(names[a], names[b]) for a, b in placed], distances, unplaced)
+
+
+def pair_labels(n_vertices: int, pairs: LandmarkPairs) -> np.ndarray:
+    """The pair attribute (N,): +k on left vertices, -k on right ones, 0 elsewhere."""
+    labels = np.zeros(n_vertices)
+    labels[pairs.left], labels[pairs.right] = pairs.ids, -pairs.ids
+    return labels

@@ -1,0 +1,133 @@
+"""The symblend command, through main([...]) and once as a real process."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pymeshlab
+import pytest
+
+from filter_symblend import PARAMETERS, synthetic
+from filter_symblend.cli import main
+from filter_symblend.landmark_files import Landmark, LandmarkSet, read_landmarks, write_landmarks
+
+
+@pytest.fixture()
+def bent_cow_files(tmp_path, cow):
+    """A bent cow as OBJ and its landmarks, named L_k / R_k, as a MeshLab .pp file."""
+    left, right = cow.landmarks(80)
+    deformed = synthetic.bend(cow.points, 1.0)
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=deformed, face_matrix=cow.faces))
+    mesh_path = tmp_path / "cow_bent.obj"
+    ms.save_current_mesh(str(mesh_path))
+    landmarks = LandmarkSet([Landmark(f"{side}_{k}", tuple(deformed[v]))
+                             for k, (a, b) in enumerate(zip(left, right)) for side, v in (("L", a), ("R", b))])
+    landmark_path = tmp_path / "cow_bent_picked_points.pp"
+    write_landmarks(landmark_path, landmarks)
+    return mesh_path, landmark_path, deformed, left, right
+
+
+def test_symmetrize_writes_the_mesh_and_the_report(tmp_path, bent_cow_files, capsys):
+    mesh_path, landmark_path, deformed, left, right = bent_cow_files
+    output, report = tmp_path / "out.ply", tmp_path / "report.json"
+    assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "-o", str(output),
+                 "--report", str(report), "--mode", "articulated", "--phi-width", "6"]) == 0
+    assert "80 pairs, mode articulated" in capsys.readouterr().out
+    data = json.loads(report.read_text())
+    assert data["mode"] == "articulated" and data["phi_width"] == 6 and data["pair_count"] == 80
+    assert data["hausdorff_input_output"]["max"] > 0 and data["landmarks"]["snap_distance_max"] < 1e-5
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(output))
+    written = ms.current_mesh()
+    from filter_symblend import symmetrize
+
+    expected = symmetrize(deformed, left, right, mode="articulated", phi_width=6)
+    np.testing.assert_allclose(written.vertex_matrix(), expected.points, atol=1e-9)
+    np.testing.assert_allclose(written.vertex_scalar_array(), expected.asymmetry, atol=1e-9)
+
+
+def test_errors_are_one_line_and_write_nothing(tmp_path, bent_cow_files, capsys):
+    mesh_path, landmark_path, *_ = bent_cow_files
+    landmarks = read_landmarks(landmark_path)
+    landmarks.landmarks.append(Landmark("nasion", landmarks.landmarks[0].position))
+    broken = tmp_path / "broken.pp"
+    write_landmarks(broken, landmarks)
+    before = landmark_path.read_bytes()
+    output = tmp_path / "out.ply"
+    assert main(["symmetrize", str(mesh_path), "-l", str(broken), "-o", str(output)]) == 1
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "symblend: error:" in error and "'nasion'" in error
+    assert not output.exists() and not list(tmp_path.glob(".*partial*"))
+    assert landmark_path.read_bytes() == before
+    assert main(["symmetrize", str(tmp_path / "none.obj"), "-l", str(broken), "-o", str(output)]) == 1
+    assert "none.obj: no such mesh file" in capsys.readouterr().err
+    assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "-o", str(output), "--alpha", "0"]) == 1
+    assert "`alpha` must be in (0, 100]" in capsys.readouterr().err
+
+
+def test_check_and_convert(tmp_path, bent_cow_files, capsys):
+    mesh_path, landmark_path, *_ = bent_cow_files
+    assert main(["landmarks", "check", str(mesh_path), "-l", str(landmark_path)]) == 0
+    out = capsys.readouterr().out
+    assert "80 pairs" in out and "L_0 -> vertex" in out and "ok: the pairs can be symmetrized" in out
+    converted = tmp_path / "points.fcsv"
+    assert main(["landmarks", "convert", str(landmark_path), str(converted)]) == 0
+    assert read_landmarks(converted).names() == read_landmarks(landmark_path).names()
+
+
+def test_pair_table_option(tmp_path, bent_cow_files, capsys):
+    mesh_path, landmark_path, *_ = bent_cow_files
+    landmarks = read_landmarks(landmark_path)
+    renamed = LandmarkSet([Landmark(f"p{i}", lm.position) for i, lm in enumerate(landmarks.landmarks, 1)])
+    write_landmarks(tmp_path / "numbered.csv", renamed)
+    (tmp_path / "pairs.csv").write_text("\n".join(f"{2 * k + 1},{2 * k + 2}" for k in range(80)))
+    assert main(["landmarks", "check", str(mesh_path), "-l", str(tmp_path / "numbered.csv"),
+                 "--pairs", str(tmp_path / "pairs.csv")]) == 0
+    assert "80 pairs" in capsys.readouterr().out
+
+
+def test_help_lists_every_parameter_with_default(capsys):
+    with pytest.raises(SystemExit):
+        main(["symmetrize", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for p in PARAMETERS:
+        assert f"--{p.name.replace('_', '-')}" in text
+        assert f"Default: {p.default}" in text
+
+
+def test_real_process(tmp_path, bent_cow_files):
+    mesh_path, landmark_path, *_ = bent_cow_files
+    output = tmp_path / "out.ply"
+    result = subprocess.run([sys.executable, "-m", "filter_symblend.cli", "symmetrize", str(mesh_path),
+                             "-l", str(landmark_path), "-o", str(output)], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert output.exists() and "landmark asymmetry" in result.stdout
+
+
+def test_ply_output_round_trips_its_attributes_and_symmetrizes_again(tmp_path, bent_cow_files):
+    from filter_symblend.ply_attributes import load_mesh_with_attributes, read_ply_vertex_properties
+
+    mesh_path, landmark_path, *_ = bent_cow_files
+    output = tmp_path / "out.ply"
+    assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "-o", str(output)]) == 0
+    properties = read_ply_vertex_properties(output)
+    np.testing.assert_allclose(properties["symblend_asymmetry"], properties["quality"])
+    ms = pymeshlab.MeshSet()
+    assert sorted(load_mesh_with_attributes(ms, output)) == ["symblend_asymmetry", "symblend_pair"]
+    labels = ms.current_mesh().vertex_custom_scalar_attribute_array("symblend_pair")
+    assert labels.max() == 80 and labels.min() == -80
+    before = ms.current_mesh().vertex_matrix().copy()
+    ms.generate_symmetrized_mesh()
+    assert np.abs(ms.current_mesh().vertex_matrix() - before).max() < 1e-8  # already symmetric
+
+
+def test_ascii_ply_properties(tmp_path):
+    from filter_symblend.ply_attributes import read_ply_vertex_properties
+
+    path = tmp_path / "a.ply"
+    path.write_text("ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+                    "property float z\nproperty double symblend_pair\nelement face 0\n"
+                    "property list uchar int vertex_indices\nend_header\n0 0 0 1\n1 0 0 -1\n")
+    assert read_ply_vertex_properties(path)["symblend_pair"].tolist() == [1.0, -1.0]

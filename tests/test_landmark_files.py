@@ -1,0 +1,115 @@
+"""Landmark files: round trips for every format, real-world quirks, frames, errors."""
+
+import numpy as np
+import pytest
+
+from filter_symblend.landmark_files import (FORMATS, Landmark, LandmarkFileError, LandmarkSet, read_landmarks,
+                                            write_landmarks)
+
+SAMPLE = LandmarkSet([
+    Landmark("L_orbitale", (1.25, -2.5, 3.0)),
+    Landmark("R_orbitale", (-1.25, -2.5, 3.0)),
+    Landmark("nasion", (0.0, 4.0, 1e-7)),
+    Landmark("L_porion", (0.0, 0.0, 0.0), placed=False),
+], coordinate_system="LPS")
+
+
+@pytest.mark.parametrize("suffix", sorted(FORMATS))
+def test_round_trip(tmp_path, suffix):
+    path = tmp_path / f"points{suffix}"
+    write_landmarks(path, SAMPLE)
+    back = read_landmarks(path)
+    assert back.names() == SAMPLE.names()
+    assert [lm.placed for lm in back.landmarks] == [True, True, True, False]
+    for a, b in zip(back.landmarks[:3], SAMPLE.landmarks[:3]):
+        assert a.position == b.position
+    if suffix in (".fcsv", ".mrk.json"):
+        assert back.coordinate_system == "LPS"
+    assert not list(tmp_path.glob("*.partial"))
+
+
+def test_meshlab_pickpoints_with_unplaced_points(tmp_path):
+    path = tmp_path / "skull_picked_points.pp"
+    path.write_text("""<!DOCTYPE PickedPoints>
+<PickedPoints>
+ <DocumentData>
+  <DateTime time="10:01:02" date="2025-01-01"/>
+  <User name="anna"/>
+  <DataFileName name="skull.ply"/>
+  <templateName name="primate"/>
+ </DocumentData>
+ <point x="1.5" y="2" z="-3" active="1" name="L_zygion"/>
+ <point x="0" y="0" z="0" active="0" name="R_zygion"/>
+</PickedPoints>
+""")
+    points = read_landmarks(path)
+    assert points.names() == ["L_zygion", "R_zygion"]
+    assert points.landmarks[0].position == (1.5, 2.0, -3.0)
+    assert [lm.placed for lm in points.landmarks] == [True, False]
+    assert points.coordinate_system is None
+
+
+def test_slicer5_fcsv_with_extra_columns_and_status(tmp_path):
+    path = tmp_path / "points.fcsv"
+    path.write_text("""# Markups fiducial file version = 5.6
+# CoordinateSystem = RAS
+# columns = id,x,y,z,ow,ox,oy,oz,vis,sel,lock,label,desc,associatedNodeID,orientationExtra,positionStatus
+1,10.5,-3,2,0,0,0,1,1,1,0,"L_gonion, left",,vtkMRMLModelNode4,0,defined
+2,-10.5,-3,2,0,0,0,1,1,1,0,R_gonion,,vtkMRMLModelNode4,0,undefined
+""")
+    points = read_landmarks(path)
+    assert points.coordinate_system == "RAS"
+    assert points.names() == ["L_gonion, left", "R_gonion"]
+    assert [lm.placed for lm in points.landmarks] == [True, False]
+    converted, note = points.in_frame("LPS")
+    assert converted.landmarks[0].position == (-10.5, 3.0, 2.0)
+    assert note == "coordinates converted from RAS to LPS (x and y negated)"
+    assert points.in_frame("RAS")[1] == "coordinates used as stored"
+
+
+@pytest.mark.parametrize("code, system", [("0", "RAS"), ("1", "LPS")])
+def test_old_fcsv_numeric_coordinate_system(tmp_path, code, system):
+    path = tmp_path / "old.fcsv"
+    path.write_text(f"# Markups fiducial file version = 4.6\n# CoordinateSystem = {code}\n"
+                    "# columns = id,x,y,z,ow,ox,oy,oz,vis,sel,lock,label,desc,associatedNodeID\n"
+                    "vtkMRMLMarkupsFiducialNode_0,1,2,3,0,0,0,1,1,1,0,F-1,,\n")
+    points = read_landmarks(path)
+    assert points.coordinate_system == system and points.landmarks[0].position == (1.0, 2.0, 3.0)
+
+
+def test_slicer_json_status_and_system(tmp_path):
+    path = tmp_path / "points.mrk.json"
+    path.write_text('{"@schema": "x", "markups": [{"type": "Fiducial", "coordinateSystem": "RAS", "controlPoints": ['
+                    '{"label": "L_a", "position": [1, 2, 3], "positionStatus": "defined"},'
+                    '{"label": "R_a", "position": [0, 0, 0], "positionStatus": "preview"}]}]}')
+    points = read_landmarks(path)
+    assert points.coordinate_system == "RAS" and [lm.placed for lm in points.landmarks] == [True, False]
+
+
+def test_landmark_editor_pts_with_missing_values(tmp_path):
+    path = tmp_path / "points.pts"
+    path.write_text("Version 1.0\n3\nS0001 1.0 2.0 3.0\nS0002 9999 9999 9999\nS0003 -1 2 3\n")
+    points = read_landmarks(path)
+    assert points.names() == ["S0001", "S0002", "S0003"]
+    assert [lm.placed for lm in points.landmarks] == [True, False, True]
+
+
+@pytest.mark.parametrize("name, text, pattern", [
+    ("bad.pp", "<PickedPoints><point x='a' y='0' z='0' name='p'/></PickedPoints>", r"bad.pp, point 1 \(p\): 'a' is not a number"),
+    ("bad.pp", "<PickedPoints><point", r"not a valid PickPoints XML"),
+    ("bad.pts", "Version 1.0\n3\nA 1 2 3\n", r"the count line says 3 points but 1 follow"),
+    ("bad.csv", "a,b,c\n1,2,3\n", r"first row must name the columns name \(or label\), x, y, z"),
+    ("bad.fcsv", "# CoordinateSystem = IJK\n", r"coordinate system 'IJK' is not LPS or RAS"),
+    ("bad.mrk.json", "{}", r"not a Slicer markups file"),
+    ("bad.txt", "", r"unknown landmark format; use one of .csv, .fcsv, .mrk.json, .pp, .pts"),
+])
+def test_unreadable_files_name_the_file_and_the_place(tmp_path, name, text, pattern):
+    path = tmp_path / name
+    path.write_text(text)
+    with pytest.raises(LandmarkFileError, match=pattern):
+        read_landmarks(path)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(LandmarkFileError, match=r"nothere.pp: cannot be read"):
+        read_landmarks(tmp_path / "nothere.pp")
