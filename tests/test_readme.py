@@ -14,7 +14,7 @@ def test_python_examples_run(tmp_path, monkeypatch):
     namespace = {}
     for block in re.findall(r"```python\n(.*?)```", README, flags=re.S):
         exec(compile(block, "README.md", "exec"), namespace)
-    assert (tmp_path / "cow_symmetrized.ply").exists()
+    assert (tmp_path / "cow_symmetrized.ply").exists() and (tmp_path / "cow.pp").exists()
 
 
 def test_first_commands_are_the_demo_and_the_tests_and_ci_runs_the_second():
