@@ -122,12 +122,21 @@ def _fit_quality(moments, left, right, left_centre, right_centre, normals, m_lef
     return neighbourhood, np.linalg.norm(own, axis=1) / radius
 
 
+def _degenerate(pair_ids: np.ndarray, mask: np.ndarray, layout: str, estimate: str, fix: str):
+    return GeometryError(
+        f"The landmarks around pair(s) {id_list(pair_ids[mask])} are (nearly) {layout}, so the "
+        f"{estimate} cannot be estimated there. {fix} A pair far from its neighbours' partners "
+        "is cut off from them and causes this too: check that it joins the right two vertices."
+    )
+
+
 def _standard(moments: _Moments, pair_ids: np.ndarray | None = None):
     centre = 0.5 * (moments.left_mean + moments.right_mean)
     _, _, kpq = moments.centred(centre, centre)
     normals = _smallest_eigenvector(_symmetrize(kpq))
     identity = np.broadcast_to(np.eye(3), (len(normals), 3, 3))
-    return normals, identity, identity, identity, centre, centre, np.ones(len(normals)), None
+    none = np.zeros(len(normals), dtype=bool)
+    return normals, identity, identity, identity, centre, centre, np.ones(len(normals)), none
 
 
 def _affine(moments: _Moments, pair_ids: np.ndarray):
@@ -136,13 +145,8 @@ def _affine(moments: _Moments, pair_ids: np.ndarray):
     spread, frames = np.linalg.eigh(cpp + cqq)
     flat = spread[:, 0] <= DEGENERATE_RATIO * spread[:, 2]
     if flat.any():
-        raise GeometryError(
-            f"The landmarks around pair(s) {id_list(pair_ids[flat])} are (nearly) coplanar, so "
-            "the affine mode cannot estimate a local stretch there. Increase `theta_width`, "
-            "add landmarks off that plane, or use mode='standard'. A pair far from its "
-            "neighbours' partners is cut off from them and causes this too: check that it "
-            "joins the right two vertices."
-        )
+        raise _degenerate(pair_ids, flat, "coplanar", "local stretch (affine mode)",
+                          "Increase `theta_width`, add landmarks off that plane, or use mode='standard'.")
     root = np.sqrt(spread)
     isotropic = (frames / root[:, None, :]) @ np.swapaxes(frames, 1, 2)  # T = C^-1/2
     inverse = (frames * root[:, None, :]) @ np.swapaxes(frames, 1, 2)  # T^-1
@@ -158,7 +162,8 @@ def _affine(moments: _Moments, pair_ids: np.ndarray):
     stretch = np.where(skewed, (1.0 + sin) / cos, 1.0)
     s_matrix = np.eye(3) + (stretch - 1.0)[:, None, None] * v[:, :, None] * v[:, None, :]
     normals = normalize(np.einsum("nij,nj->ni", s_matrix, d))
-    return normals, s_matrix, s_matrix, s_matrix, centre, centre, stretch, None
+    return (normals, s_matrix, s_matrix, s_matrix, centre, centre, stretch,
+            np.zeros(len(normals), dtype=bool))
 
 
 def _articulated(moments: _Moments, pair_ids: np.ndarray):
@@ -167,13 +172,8 @@ def _articulated(moments: _Moments, pair_ids: np.ndarray):
     singular = np.linalg.svd(kpq, compute_uv=False)
     collinear = singular[:, 1] <= DEGENERATE_RATIO * singular[:, 0]
     if collinear.any():
-        raise GeometryError(
-            f"The landmarks around pair(s) {id_list(pair_ids[collinear])} are (nearly) collinear, "
-            "so the articulated mode cannot estimate a local rotation there. Increase "
-            "`theta_width` or add landmarks off that line. A pair far from its neighbours' "
-            "partners is cut off from them and causes this too: check that it joins the "
-            "right two vertices."
-        )
+        raise _degenerate(pair_ids, collinear, "collinear", "local rotation (articulated mode)",
+                          "Increase `theta_width` or add landmarks off that line.")
     rotation = proper_rotation_fit(-kpq)  # V with p' ~ V(-q')
     skew = np.stack([rotation[:, 2, 1] - rotation[:, 1, 2], rotation[:, 0, 2] - rotation[:, 2, 0],
                      rotation[:, 1, 0] - rotation[:, 0, 1]], axis=1)  # 2 sin(angle) axis
@@ -216,7 +216,5 @@ def local_symmetries(
                                  -1.0, 1.0)[:, None]
     residuals, misfits = _fit_quality(moments, left, right, left_centre, right_centre, normals,
                                       m_left, m_right)
-    if point_refl is None:
-        point_refl = np.zeros(len(normals), dtype=bool)
     return LocalSymmetries(normals, np.ascontiguousarray(m_left), np.ascontiguousarray(m_right),
                            np.ascontiguousarray(m_gap), residuals, misfits, stretch, point_refl)
