@@ -61,10 +61,12 @@ def proper_rotation_fit(cross_covariance: np.ndarray) -> np.ndarray:
     return u @ (np.concatenate([np.ones((len(d), 2)), d[:, None]], axis=1)[:, :, None] * vt)
 
 
-def rigid_fit(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Best rigid motion (R (3, 3), t (3,)) with target ~ source @ R.T + t (least squares)."""
-    cs, ct = source.mean(axis=0), target.mean(axis=0)
-    h = (target - ct).T @ (source - cs)
+def rigid_fit(source: np.ndarray, target: np.ndarray, weights: np.ndarray | None = None):
+    """Best rigid motion (R (3, 3), t (3,)) with target ~ source @ R.T + t (weighted least squares,
+    ``weights`` (n,) >= 0, default 1)."""
+    w = np.ones(len(source)) if weights is None else weights
+    cs, ct = w @ source / w.sum(), w @ target / w.sum()
+    h = (w[:, None] * (target - ct)).T @ (source - cs)
     rotation = proper_rotation_fit(h[None])[0]
     return rotation, ct - rotation @ cs
 

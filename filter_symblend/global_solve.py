@@ -17,12 +17,22 @@ equations decouple (derivation in the README's references):
   x:    4 [L + alpha (D + Phi)] x = rowS(a - b)_x - colS(a - b)_x + alpha [rowS(c - e)_x + colS(c - e)_x]
   y, z: 4 (1 + alpha) L y = rowS(G)_y - colS(G)_y,   G = a + b + alpha (c + e)
 
-with rowS(X)_k = sum_j phi_kj X_kj and colS(X)_k = sum_i phi_ik X_ik. Both row
-and column sums of the per-edge targets reduce to sparse products of Phi with
+with rowS(X)_k = sum_j phi_kj X_kj and colS(X)_k = sum_i phi_ik X_ik. With
+per-landmark weights (the paper's missing regions, Sec. 4.2) each term gets
+its own weight matrix: Phi_p = Wp Phi Wp for a, Phi_q = Wq Phi Wq for b,
+C = Wp Phi Wq for c and C^T for e, and with S = C + C^T the systems become
+
+  x:    [2 L(Phi_p) + 2 L(Phi_q) + 2 alpha (diag(S 1) + S)] x = rowS_p(a) - colS_p(a) - rowS_q(b) + colS_q(b)
+                                                          + alpha [rowS_C(c) + colS_C(c) - rowS_C^T(e) - colS_C^T(e)]
+  y, z: [2 L(Phi_p) + 2 L(Phi_q) + 2 alpha L(S)] y = the same sums with the signs of a, b, c, e all +, rows - cols
+
+which are the ones above when all weights are 1. Row and column sums of the
+per-edge targets reduce to sparse products of the weight matrices with
 per-pair vectors and 3x3 matrices, so nothing of size (number of edges, 3) is
-formed. The x matrix is positive definite for alpha > 0; the y, z matrix is a
-graph Laplacian whose null space (translation) is pinned by fixing pair 0 and
-then moving the solution to zero mean. The solver is chosen by size (see
+formed. The x matrix is positive definite for alpha > 0; midline landmarks
+(on_plane) have x = 0 fixed and their rows removed. The y, z matrix is a graph
+Laplacian whose null space (translation) is pinned by fixing pair 0 and then
+moving the solution to zero mean. The solver is chosen by size (see
 ``_solve_positive_definite``); it starts from the input, which the solution
 differs from by the symmetrizing deformation only.
 """
@@ -88,52 +98,71 @@ def _solve_positive_definite(matrix: sp.csr_matrix, rhs: np.ndarray, guess: np.n
     )
 
 
+def _edge_sums(weights: sp.csr_matrix, a_matrices, origins, ends):
+    """Row and column sums over the edges of ``weights`` (n, n), possibly non-symmetric, of the
+    targets t_ij = A_i (origin_i - end_j): rowS_k = sum_j w_kj t_kj, colS_k = sum_i w_ik t_ik."""
+    n = len(origins)
+    transposed = weights.T.tocsr()
+    row_degree = np.asarray(weights.sum(axis=1)).ravel()
+    row = _apply(a_matrices, row_degree[:, None] * origins - weights @ ends)
+    stacked = transposed @ np.hstack([_apply(a_matrices, origins), a_matrices.reshape(n, 9)])
+    col = stacked[:, :3] - _apply(stacked[:, 3:].reshape(n, 3, 3), ends)
+    return row, col
+
+
+def _laplacian(weights: sp.csr_matrix) -> sp.csr_matrix:
+    return sp.diags(np.asarray(weights.sum(axis=1)).ravel()) - weights
+
+
 def global_solve(
     phi: sp.csr_matrix,
     left: np.ndarray,
     right: np.ndarray,
     local: LocalSymmetries,
     alpha: float,
+    left_weights: np.ndarray | None = None,
+    right_weights: np.ndarray | None = None,
+    on_plane: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Symmetric output pairs (r, s), each (n, 3), with s = r mirrored across x = 0.
 
     phi (n, n): symmetric pair weights, diagonal included. left, right (n, 3):
     input pairs in a frame where the mean local normal is about -x. local:
-    Step 1 output in the same frame. alpha > 0.
+    Step 1 output in the same frame. alpha > 0. left_weights, right_weights
+    (n,) in [0, 1]: how much each landmark's input geometry counts (0: missing
+    or broken, that side becomes the mirror image of the other; default 1).
+    on_plane (n,) bool: midline landmarks (left = right), held on x = 0.
     """
     n = len(left)
+    wl = np.ones(n) if left_weights is None else left_weights
+    wr = np.ones(n) if right_weights is None else right_weights
+    phi_left = sp.csr_matrix(sp.diags(wl) @ phi @ sp.diags(wl))
+    phi_right = sp.csr_matrix(sp.diags(wr) @ phi @ sp.diags(wr))
+    phi_gap = sp.csr_matrix(sp.diags(wl) @ phi @ sp.diags(wr))  # r_i - s_j terms; s_i - r_j use its transpose
     rotations = minimal_rotation(local.normals, MINUS_X)
     a_left = rotations @ local.left_transforms
     a_right = rotations @ local.right_transforms
     a_gap = rotations @ local.gap_transforms
-    degree = np.asarray(phi.sum(axis=1)).ravel()
 
-    blocks = [left, right, _apply(a_left, left), _apply(a_right, right), _apply(a_gap, left),
-              _apply(a_gap, right), a_left.reshape(n, 9), a_right.reshape(n, 9),
-              a_gap.reshape(n, 9)]
-    sums = np.split(phi @ np.hstack(blocks), np.cumsum([b.shape[1] for b in blocks])[:-1], axis=1)
-    phi_p, phi_q, phi_ap, phi_bq, phi_cp, phi_cq = sums[:6]
-    phi_a, phi_b, phi_c = (m.reshape(n, 3, 3) for m in sums[6:])
+    row_a, col_a = _edge_sums(phi_left, a_left, left, left)
+    row_b, col_b = _edge_sums(phi_right, a_right, right, right)
+    row_c, col_c = _edge_sums(phi_gap, a_gap, left, right)
+    row_e, col_e = _edge_sums(sp.csr_matrix(phi_gap.T), a_gap, right, left)
 
-    row_a = _apply(a_left, degree[:, None] * left - phi_p)
-    col_a = phi_ap - _apply(phi_a, left)
-    row_b = _apply(a_right, degree[:, None] * right - phi_q)
-    col_b = phi_bq - _apply(phi_b, right)
-    row_c = _apply(a_gap, degree[:, None] * left - phi_q)
-    col_c = phi_cp - _apply(phi_c, right)
-    row_e = _apply(a_gap, degree[:, None] * right - phi_p)
-    col_e = phi_cq - _apply(phi_c, left)
+    rhs_x = (row_a - col_a - row_b + col_b + alpha * (row_c + col_c - row_e - col_e))[:, 0]
+    rhs_yz = (row_a - col_a + row_b - col_b + alpha * (row_c - col_c + row_e - col_e))[:, 1:]
 
-    rhs_x = (row_a - row_b - col_a + col_b + alpha * (row_c - row_e + col_c - col_e))[:, 0]
-    rhs_yz = (row_a + row_b - col_a - col_b + alpha * (row_c + row_e - col_c - col_e))[:, 1:]
-
-    degree_matrix = sp.diags(degree)
-    x_matrix = sp.csr_matrix(4.0 * ((1.0 + alpha) * degree_matrix - (1.0 - alpha) * phi))
-    x = _solve_positive_definite(x_matrix, rhs_x[:, None], left[:, :1])[:, 0]
-    laplacian = sp.csr_matrix(4.0 * (1.0 + alpha) * (degree_matrix - phi))
+    gap_sum = phi_gap + phi_gap.T
+    side_laplacians = 2.0 * (_laplacian(phi_left) + _laplacian(phi_right))
+    x_matrix = sp.csr_matrix(side_laplacians + 2.0 * alpha * (sp.diags(np.asarray(gap_sum.sum(axis=1)).ravel())
+                                                              + gap_sum))
+    free = np.ones(n, dtype=bool) if on_plane is None else ~on_plane
+    x = np.zeros(n)
+    x[free] = _solve_positive_definite(x_matrix[free][:, free], rhs_x[free, None], left[free, :1])[:, 0]
+    yz_matrix = sp.csr_matrix(side_laplacians + 2.0 * alpha * _laplacian(gap_sum))
     yz = np.zeros((n, 2))
     guess = 0.5 * (left + right)[1:, 1:] - 0.5 * (left + right)[0, 1:]
-    yz[1:] = _solve_positive_definite(laplacian[1:, 1:], rhs_yz[1:], guess)
+    yz[1:] = _solve_positive_definite(yz_matrix[1:, 1:], rhs_yz[1:], guess)
     yz -= yz.mean(axis=0)
 
     r = np.column_stack([x, yz])

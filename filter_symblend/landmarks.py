@@ -20,11 +20,13 @@ FLAT_RATIO = 1e-6  # landmark spread below this fraction of the largest one coun
 
 @dataclasses.dataclass(frozen=True)
 class LandmarkPairs:
-    """n pairs of vertex indices: pair ``ids[k]`` joins ``left[k]`` (+k) and ``right[k]`` (-k)."""
+    """n pairs of vertex indices: pair ``ids[k]`` joins ``left[k]`` (+k) and ``right[k]`` (-k);
+    ``midline`` (m,) holds the vertices of midline landmarks (on the symmetry plane)."""
 
     ids: np.ndarray
     left: np.ndarray
     right: np.ndarray
+    midline: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
 
 def pairs_from_attribute(values: np.ndarray, attribute: str) -> LandmarkPairs:
@@ -75,6 +77,10 @@ def pairs_from_attribute(values: np.ndarray, attribute: str) -> LandmarkPairs:
     )
 
 
+def _label(label) -> str:
+    return label if isinstance(label, str) else f"{label:+d}"
+
+
 def check_points(points: np.ndarray) -> np.ndarray:
     """``points`` as a float (N, 3) array with finite coordinates, or GeometryError."""
     points = np.asarray(points, dtype=float)
@@ -98,11 +104,12 @@ def check_pairs(points: np.ndarray, pairs: LandmarkPairs) -> None:
             f"Found {n} landmark pair(s){' (' + ', '.join(map(str, pairs.ids)) + ')' if n else ''}; "
             f"the filter needs at least {MIN_PAIRS} pairs, not all on one plane. Add pairs."
         )
-    for side in (pairs.left, pairs.right):
+    for side, ids in ((pairs.left, pairs.ids), (pairs.right, pairs.ids),
+                      (pairs.midline, [f"midline {j}" for j in range(1, len(pairs.midline) + 1)])):
         outside = (side < 0) | (side >= len(points))
         if outside.any():
             raise LandmarkError(
-                f"Pair {pairs.ids[outside][0]} names vertex {side[outside][0]}, but the mesh "
+                f"Pair {np.asarray(ids)[outside][0]} names vertex {side[outside][0]}, but the mesh "
                 f"has {len(points)} vertices (0..{len(points) - 1})."
             )
     same = pairs.left == pairs.right
@@ -112,22 +119,24 @@ def check_pairs(points: np.ndarray, pairs: LandmarkPairs) -> None:
             f"Pair {k} pairs vertex {pairs.left[same][0]} with itself. A landmark on the "
             "symmetry plane is not a pair; give pair k two distinct mirror-image vertices."
         )
-    vertices = np.concatenate([pairs.left, pairs.right])
-    labels = np.concatenate([pairs.ids, -pairs.ids])
+    vertices = np.concatenate([pairs.left, pairs.right, pairs.midline])
+    labels = np.concatenate([pairs.ids.astype(object), -pairs.ids,
+                             [f"midline {j}" for j in range(1, len(pairs.midline) + 1)]]).astype(object)
     order = np.argsort(vertices, kind="stable")
     repeated = np.flatnonzero(np.diff(vertices[order]) == 0)
     if repeated.size:
         first, second = labels[order[repeated[0]]], labels[order[repeated[0] + 1]]
         raise LandmarkError(
-            f"Vertex {vertices[order[repeated[0]]]} is used by two landmarks ({first:+d} and "
-            f"{second:+d}); each vertex can hold one landmark."
+            f"Vertex {vertices[order[repeated[0]]]} is used by two landmarks ({_label(first)} and "
+            f"{_label(second)}); each vertex can hold one landmark."
         )
     positions = points[vertices]
     close = cKDTree(positions).query_pairs(0.0, output_type="ndarray")
     if len(close):
         i, j = close[np.lexsort((close[:, 1], close[:, 0]))[0]]  # deterministic: lowest first
-        what = (f"Pair {abs(labels[i])}: its two landmarks" if abs(labels[i]) == abs(labels[j])
-                else f"Landmarks {labels[i]:+d} and {labels[j]:+d}")
+        same_pair = not isinstance(labels[i], str) and not isinstance(labels[j], str) and abs(labels[i]) == abs(labels[j])
+        what = (f"Pair {abs(labels[i])}: its two landmarks" if same_pair
+                else f"Landmarks {_label(labels[i])} and {_label(labels[j])}")
         raise GeometryError(
             f"{what} sit at the same position (vertices {vertices[i]} and {vertices[j]}). "
             "Merge duplicate vertices (meshing_remove_duplicate_vertices) or move one "

@@ -114,6 +114,19 @@ PARAMETERS: tuple[Parameter, ...] = (
         adapter_only=True,
     ),
     Parameter(
+        "midline_attribute", "string", "symblend_midline", "Midline landmark attribute",
+        "Per-vertex custom scalar attribute marking midline landmarks (non-zero on them): they "
+        "end up exactly on the symmetry plane. Ignored if the mesh has no such attribute.",
+        adapter_only=True,
+    ),
+    Parameter(
+        "weight_attribute", "string", "symblend_weight", "Landmark weight attribute",
+        "Per-vertex custom scalar attribute in [0, 1] read at the landmarks: 0 marks a missing or "
+        "broken landmark, whose side then takes the mirror shape of the other side (the paper's "
+        "missing regions). Ignored if the mesh has no such attribute; all weights are 1 then.",
+        adapter_only=True,
+    ),
+    Parameter(
         "output_frame", "enum", "input", "Output frame",
         "'input': the result rigidly fitted back onto the input landmarks, for "
         "before/after comparison. 'canonical': symmetry plane x = 0, left (+k) "

@@ -182,3 +182,56 @@ def test_sound_inputs_raise_no_warning(cow):
         warnings.simplefilter("error", SymblendWarning)
         for mode in MODES:
             symmetrize(deformed, left, right, mode=mode)
+
+
+def midline_vertices(gt, count):
+    on_plane = np.flatnonzero(gt.partner == np.arange(len(gt.partner)))
+    chosen = [on_plane[0]]
+    distance = np.linalg.norm(gt.points[on_plane] - gt.points[chosen[0]], axis=1)
+    for _ in range(count - 1):
+        chosen.append(on_plane[int(np.argmax(distance))])
+        distance = np.minimum(distance, np.linalg.norm(gt.points[on_plane] - gt.points[chosen[-1]], axis=1))
+    return np.array(chosen)
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_midline_landmarks_end_up_on_the_symmetry_plane(symmetric_mesh, mode):
+    gt = symmetric_mesh
+    left, right = gt.landmarks(120)
+    midline = midline_vertices(gt, 12)
+    deformed = synthetic.random_rigid(synthetic.compress(synthetic.bend(gt.points, 1.0), [1, 1, 0], 0.7, 0.1), 5)
+    normal0 = fit_plane_normal(deformed, left, right)
+    assert np.abs(deformed[midline] @ normal0 - np.median(deformed[midline] @ normal0)).max() > 1e-2 * gt.diagonal
+    for frame in ("input", "canonical"):
+        result = quiet_symmetrize(deformed, left, right, midline=midline, mode=mode, output_frame=frame)
+        normal, offset = np.array(result.report["plane_normal"]), result.report["plane_offset"]
+        assert np.abs(result.points[midline] @ normal - offset).max() < 1e-12 * gt.diagonal
+        assert result.report["midline_count"] == 12 and result.report["landmark_asymmetry_after"]["max_relative"] < 1e-12
+
+
+def fit_plane_normal(points, left, right):
+    from filter_symblend.asymmetry import fit_mirror_plane
+
+    return fit_mirror_plane(points[left], points[right]).normal
+
+
+def test_a_weight_zero_side_takes_the_mirror_shape_of_the_other(cow):
+    """The paper's Figure 9: a broken region on one side, marked missing, is rebuilt from its twin."""
+    left, right = cow.landmarks(300)
+    centre = cow.points[right[np.argmin(np.linalg.norm(cow.points[right] - [-0.25, 0.1, 0.3], axis=1))]]
+    distance = np.linalg.norm(cow.points - centre, axis=1)
+    region = (distance < 0.25) & (cow.points[:, 0] < cow.offset)
+    broken = cow.points.copy()
+    broken[region, 0] -= 0.08 * (1 - distance[region] / 0.25) ** 2  # a swelling on the right flank
+    right_weights = np.where(region[right], 0.0, 1.0)
+    assert (right_weights == 0).sum() >= 5
+    mirrored_region = np.flatnonzero(region & (cow.partner >= 0))
+    from filter_symblend.geometry import similarity_fit
+
+    plain = similarity_fit(quiet_symmetrize(broken, left, right).points, cow.points)
+    weighted = quiet_symmetrize(broken, left, right, right_weights=right_weights).points
+    weighted = similarity_fit(weighted, cow.points)
+    err = {name: np.sqrt(np.mean(np.sum((out[mirrored_region] - cow.points[mirrored_region]) ** 2, axis=1)))
+           for name, out in (("input", broken), ("plain", plain), ("weighted", weighted))}
+    assert err["weighted"] < 0.25 * err["plain"]
+    assert err["weighted"] < 0.15 * err["input"]

@@ -100,9 +100,12 @@ def test_minimal_rotation_is_smallest_and_handles_the_opposite_vector():
     np.testing.assert_allclose(angles, np.arccos(np.clip(sources @ MINUS_X, -1, 1)), atol=1e-7)
 
 
-def dense_least_squares(phi, p, q, local, alpha):
-    """The paper's functional (with K in the alpha terms), solved as a dense least-squares problem."""
+def dense_least_squares(phi, p, q, local, alpha, wl=None, wr=None, on_plane=None):
+    """The paper's functional (with K in the alpha terms and per-landmark weights), solved as a
+    dense least-squares problem; midline pairs have their x column removed (x = 0)."""
     n = len(p)
+    wl = np.ones(n) if wl is None else wl
+    wr = np.ones(n) if wr is None else wr
     rot = minimal_rotation(local.normals, MINUS_X)
     rows, rhs = [], []
     mirror = np.diag([-1.0, 1.0, 1.0])
@@ -121,11 +124,16 @@ def dense_least_squares(phi, p, q, local, alpha):
             w = dense[i, j]
             if w == 0:
                 continue
-            block(np.eye(3), np.eye(3), i, j, a_p @ (p[i] - p[j]), w)
-            block(mirror, mirror, i, j, a_q @ (q[i] - q[j]), w)
-            block(np.eye(3), mirror, i, j, a_g @ (p[i] - q[j]), alpha * w)
-            block(mirror, np.eye(3), i, j, a_g @ (q[i] - p[j]), alpha * w)
-    solution = np.linalg.lstsq(np.vstack(rows), np.concatenate(rhs), rcond=None)[0]
+            block(np.eye(3), np.eye(3), i, j, a_p @ (p[i] - p[j]), w * wl[i] * wl[j])
+            block(mirror, mirror, i, j, a_q @ (q[i] - q[j]), w * wr[i] * wr[j])
+            block(np.eye(3), mirror, i, j, a_g @ (p[i] - q[j]), alpha * w * wl[i] * wr[j])
+            block(mirror, np.eye(3), i, j, a_g @ (q[i] - p[j]), alpha * w * wr[i] * wl[j])
+    matrix = np.vstack(rows)
+    keep = np.ones(3 * n, dtype=bool)
+    if on_plane is not None:
+        keep[3 * np.flatnonzero(on_plane)] = False
+    solution = np.zeros(3 * n)
+    solution[keep] = np.linalg.lstsq(matrix[:, keep], np.concatenate(rhs), rcond=None)[0]
     return solution.reshape(n, 3)
 
 
@@ -140,6 +148,23 @@ def test_global_solve_matches_dense_least_squares_of_the_functional(mode):
     r, s = global_solve(phi, p, q, local, alpha=0.05)
     np.testing.assert_allclose(r, dense_least_squares(phi, p, q, local, 0.05), atol=1e-10)
     np.testing.assert_allclose(s, r * [-1, 1, 1])
+
+
+def test_weighted_solve_with_midline_matches_dense_least_squares():
+    rng = np.random.default_rng(9)
+    p, q = symmetric_pairs(25, seed=3)
+    p, q = p + 0.2 * rng.normal(size=p.shape), q + 0.2 * rng.normal(size=q.shape)
+    q[:3] = p[:3] = p[:3] * [0.0, 1.0, 1.0]  # three midline landmarks: left = right
+    on_plane = np.arange(25) < 3
+    wl, wr = rng.uniform(0.2, 1.0, 25), rng.uniform(0.2, 1.0, 25)
+    wr[5], wl[8] = 0.0, 0.0
+    phi = pair_weights(p, q, 1.0)
+    local = local_symmetries("affine", pair_weights(p, q, 1.5), p, q, np.arange(1, 26))
+    r, s = global_solve(phi, p, q, local, alpha=0.05, left_weights=wl, right_weights=wr, on_plane=on_plane)
+    expected = dense_least_squares(phi, p, q, local, 0.05, wl, wr, on_plane)
+    expected[:, 1:] -= expected[:, 1:].mean(axis=0)
+    np.testing.assert_allclose(r, expected, atol=1e-10)
+    assert np.all(r[on_plane, 0] == 0.0)
 
 
 def test_global_solve_reproduces_a_globally_affine_input_exactly():

@@ -107,6 +107,12 @@ def test_vertex_in_two_pairs():
         symmetrize(points, left, right)
 
 
+def test_non_integer_index_arrays():
+    points, left, right = cube_pairs()
+    with pytest.raises(LandmarkError, match=r"`left` must hold integer vertex indices, got float64"):
+        symmetrize(points, left + 0.5, right)
+
+
 def test_mismatched_index_arrays():
     points, left, right = cube_pairs()
     with pytest.raises(LandmarkError, match=r"one entry per pair; got 8, 7 and 8"):
