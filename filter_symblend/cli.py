@@ -42,6 +42,9 @@ def _add_landmark_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--pairs", type=pathlib.Path,
                         help="pair table: two-column CSV of landmark names or 1-based numbers (left, right); "
                              "default: pair by name (L_/R_ prefixes, _left/_right suffixes, any case)")
+    parser.add_argument("--midline", action="store_true",
+                        help="treat landmarks without a partner as midline landmarks (held on the "
+                             "symmetry plane); without it they are an error")
     parser.add_argument("--mesh-frame", choices=FRAMES, default="LPS",
                         help="coordinate system of the mesh, used only when the landmark file states one "
                              "(Slicer files); default: %(default)s, as Slicer saves models")
@@ -75,7 +78,7 @@ def _snapped_pairs(ms, args):
     else:
         index_pairs, unpaired = pair_by_name(names)
     snapped = snap_pairs(ms.current_mesh().vertex_matrix(), landmarks, index_pairs, unpaired,
-                         source=str(args.landmarks))
+                         midline=args.midline, source=str(args.landmarks))
     return snapped, frame_note
 
 
@@ -98,22 +101,26 @@ def _save_atomically(ms, output: pathlib.Path, attributes: list[str]) -> None:
 
 def _symmetrize(args) -> int:
     from .hausdorff import two_way_hausdorff
+    from .attributes import optional_attribute, write_landmark_attributes
     from .meshset_filter import ASYMMETRY_ATTRIBUTE, generate_symmetrized_mesh
-    from .pairing import pair_labels
 
     params = {p.name: getattr(args, p.name) for p in PARAMETERS}
     ms = _load_mesh(args.input)
     snapped, frame_note = _snapped_pairs(ms, args)
-    mesh = ms.current_mesh()
-    mesh.add_vertex_custom_scalar_attribute(pair_labels(mesh.vertex_number(), snapped.pairs),
-                                            params["pair_attribute"])
+    missing = [name.strip() for name in args.missing.split(",") if name.strip()]
+    left_weights, right_weights = snapped.weights(missing) if missing else (None, None)
+    write_landmark_attributes(ms.current_mesh(), snapped.pairs, left_weights, right_weights,
+                              params["pair_attribute"], params["midline_attribute"], params["weight_attribute"])
     report = generate_symmetrized_mesh(ms, **params)
     report["hausdorff_input_output"] = two_way_hausdorff(ms, report["input_mesh_id"], report["output_mesh_id"])
     report["landmarks"] = {"file": str(args.landmarks), "frame": frame_note,
                            "pairs": [list(p) for p in snapped.pair_names],
+                           "midline": snapped.midline_names, "missing": missing,
                            "snap_distance_max": float(snapped.snap_distances.max()),
                            "left_out_unplaced": snapped.unplaced}
-    _save_atomically(ms, args.output, [ASYMMETRY_ATTRIBUTE, params["pair_attribute"]])
+    _save_atomically(ms, args.output, [ASYMMETRY_ATTRIBUTE] + [
+        params[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")
+        if optional_attribute(ms.current_mesh(), params[name]) is not None])
     if args.report:
         args.report.write_text(json.dumps(report, indent=2) + "\n")
     before, after = report["landmark_asymmetry_before"], report["landmark_asymmetry_after"]
@@ -128,10 +135,13 @@ def _check(args) -> int:
 
     ms = _load_mesh(args.input)
     snapped, frame_note = _snapped_pairs(ms, args)
-    print(f"{args.landmarks}: {frame_note}; {len(snapped.pair_names)} pairs")
+    print(f"{args.landmarks}: {frame_note}; {len(snapped.pair_names)} pairs, "
+          f"{len(snapped.midline_names)} midline")
     for k, ((left, right), distance) in enumerate(zip(snapped.pair_names, snapped.snap_distances), start=1):
         print(f"  {k:3d}  {left} -> vertex {snapped.pairs.left[k - 1]} (snap {distance[0]:.3g})   "
               f"{right} -> vertex {snapped.pairs.right[k - 1]} (snap {distance[1]:.3g})")
+    if snapped.midline_names:
+        print(f"midline: {', '.join(snapped.midline_names)}")
     if snapped.unplaced:
         print(f"left out (not placed): {', '.join(snapped.unplaced)}")
     check_pairs(ms.current_mesh().vertex_matrix(), snapped.pairs)
@@ -156,6 +166,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("-o", "--output", required=True, type=pathlib.Path,
                      help="output mesh; .ply keeps quality (local asymmetry) and the attributes")
     run.add_argument("--report", type=pathlib.Path, help="write the filter's report, plus Hausdorff, as JSON")
+    run.add_argument("--missing", default="", metavar="NAME,NAME",
+                     help="landmarks on missing or broken parts (weight 0): that side takes the "
+                          "mirror shape of the other (the paper's Figure 9)")
     _add_filter_options(run)
     run.set_defaults(handler=_symmetrize)
 

@@ -13,11 +13,10 @@ from __future__ import annotations
 
 import inspect
 
-import numpy as np
 import pymeshlab
 
-from .errors import LandmarkError, MeshSetError
-from .landmarks import pairs_from_attribute
+from .attributes import optional_attribute, read_landmark_attributes
+from .errors import MeshSetError
 from .parameters import keyword_signature, parameters_doc, validate_parameters
 from .symmetrize import symmetrize
 
@@ -26,40 +25,6 @@ DISPLAY_NAME = "Symmetrize: Closed-form Blending of Local Symmetries"
 ASYMMETRY_ATTRIBUTE = "symblend_asymmetry"
 _SCRATCH = ("symblend_scratch_x", "symblend_scratch_y", "symblend_scratch_z",
             "symblend_scratch_quality")
-
-
-def _optional_attribute(mesh: pymeshlab.Mesh, attribute: str):
-    try:
-        return mesh.vertex_custom_scalar_attribute_array(attribute)
-    except pymeshlab.PyMeshLabException:
-        return None
-
-
-def _read_pair_attribute(mesh: pymeshlab.Mesh, mesh_id: int, attribute: str):
-    values = _optional_attribute(mesh, attribute)
-    if values is None:
-        raise LandmarkError(
-            f"The current mesh (id {mesh_id}, '{mesh.label()}') has no per-vertex custom scalar "
-            f"attribute `{attribute}`. Add the pairs first: "
-            f"ms.current_mesh().add_vertex_custom_scalar_attribute(labels, '{attribute}') with "
-            "+k on the left vertex of pair k, -k on the right one and 0 elsewhere, or name "
-            "your attribute with `pair_attribute`."
-        )
-    return values
-
-
-def _midline_and_weights(mesh: pymeshlab.Mesh, pairs, options):
-    """Midline vertices (m,) and per-pair (left, right) weights from the optional attributes."""
-    midline_values = _optional_attribute(mesh, options["midline_attribute"])
-    midline = np.zeros(0, dtype=np.int64) if midline_values is None else np.flatnonzero(midline_values)
-    weights = _optional_attribute(mesh, options["weight_attribute"])
-    if weights is None:
-        return midline, None, None
-    if midline.size and np.any(weights[midline] != 1):
-        v = midline[weights[midline] != 1][0]
-        raise LandmarkError(f"Midline landmark on vertex {v} has weight {weights[v]:g} in "
-                            f"`{options['weight_attribute']}`; midline landmarks take no weight (set 1).")
-    return midline, weights[pairs.left], weights[pairs.right]
 
 
 def _add_output_layer(ms: pymeshlab.MeshSet, input_id: int, result, carried: dict) -> int:
@@ -106,13 +71,11 @@ def generate_symmetrized_mesh(ms: pymeshlab.MeshSet, **params) -> dict:
     input_id = ms.current_mesh_id()
     mesh = ms.current_mesh()
     attributes = {name: options.pop(name) for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
-    pair_values = _read_pair_attribute(mesh, input_id, attributes["pair_attribute"])
-    pairs = pairs_from_attribute(pair_values, attributes["pair_attribute"])
-    midline, left_weights, right_weights = _midline_and_weights(mesh, pairs, attributes)
-    result = symmetrize(mesh.vertex_matrix(), pairs.left, pairs.right, pairs.ids, midline,
+    pairs, left_weights, right_weights = read_landmark_attributes(mesh, **attributes)
+    result = symmetrize(mesh.vertex_matrix(), pairs.left, pairs.right, pairs.ids, pairs.midline,
                         left_weights, right_weights, **options)
     carried = {name: values for name in attributes.values()
-               if (values := _optional_attribute(mesh, name)) is not None}
+               if (values := optional_attribute(mesh, name)) is not None}
     output_id = _add_output_layer(ms, input_id, result, carried)
     return {**result.report, "input_mesh_id": input_id, "output_mesh_id": output_id}
 

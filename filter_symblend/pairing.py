@@ -89,59 +89,66 @@ def read_pair_table(path, names: list[str]):
 
 @dataclasses.dataclass
 class SnappedPairs:
-    """Landmark pairs on mesh vertices, with what was done to get there."""
+    """Landmark pairs (and midline landmarks) on mesh vertices, with what was done to get there."""
 
     pairs: LandmarkPairs
     pair_names: list[tuple[str, str]]
-    snap_distances: np.ndarray  # (n, 2), mesh units
+    midline_names: list[str]
+    snap_distances: np.ndarray  # (n, 2) for the pairs, mesh units
     unplaced: list[str]
+
+    def weights(self, missing: list[str]):
+        """(left, right) weights (n,): 0 for the landmarks named in ``missing``, 1 elsewhere."""
+        known = {name for pair in self.pair_names for name in pair}
+        unknown = [name for name in missing if name not in known]
+        if unknown:
+            raise LandmarkError(f"--missing names {', '.join(map(repr, unknown))}, which no pair has; "
+                                f"pair landmarks are: {', '.join(sorted(known)[:20])}.")
+        return tuple(np.array([0.0 if pair[side] in missing else 1.0 for pair in self.pair_names])
+                     for side in (0, 1))
 
 
 def snap_pairs(points: np.ndarray, landmarks: LandmarkSet, index_pairs, unpaired: list[int],
-               source: str = "landmarks") -> SnappedPairs:
-    """Snap both landmarks of every pair to their nearest vertex of ``points`` (N, 3).
+               midline: bool = False, source: str = "landmarks") -> SnappedPairs:
+    """Snap every placed landmark to its nearest vertex of ``points`` (N, 3).
 
-    Pairs with an unplaced side are left out (and listed); unpaired landmarks are
-    an error that lists them; two landmarks on one vertex are an error naming both.
+    Pairs with an unplaced side are left out (and listed). Unpaired landmarks are
+    midline landmarks when ``midline`` is true, an error that lists them otherwise.
+    Two landmarks on one vertex are an error naming both.
     """
     names = landmarks.names()
-    if unpaired:
+    if unpaired and not midline:
         listed = ", ".join(repr(names[i]) for i in unpaired[:20])
         raise LandmarkError(
             f"{source}: {len(unpaired)} landmark(s) have no partner: {listed}. Name them with a side "
-            "(L_/R_ prefix or _left/_right suffix), list them in a pair table (--pairs), or remove "
-            "them (midline landmarks are not supported yet).")
+            "(L_/R_ prefix or _left/_right suffix), list them in a pair table (--pairs), or declare "
+            "them midline landmarks (--midline).")
     placed = [(a, b) for a, b in index_pairs if landmarks.landmarks[a].placed and landmarks.landmarks[b].placed]
     unplaced = [f"{names[a]}/{names[b]}" for a, b in index_pairs if (a, b) not in placed]
+    unplaced += [names[i] for i in unpaired if not landmarks.landmarks[i].placed]
+    on_plane = [i for i in unpaired if landmarks.landmarks[i].placed]
     if unplaced:
-        warnings.warn(f"{source}: pair(s) {', '.join(unplaced)} have a landmark marked as not placed and "
+        warnings.warn(f"{source}: {', '.join(unplaced)} have a landmark marked as not placed and "
                       "are left out.", SymblendWarning, stacklevel=2)
-    positions = np.array([[landmarks.landmarks[i].position for i in pair] for pair in placed], dtype=float)
-    distances, vertices = cKDTree(points).query(positions.reshape(-1, 3))
-    vertices, distances = vertices.reshape(-1, 2), distances.reshape(-1, 2)
-    flat = vertices.ravel()
-    order = np.argsort(flat, kind="stable")
-    same = np.flatnonzero(np.diff(flat[order]) == 0)
+    order = [i for pair in placed for i in pair] + on_plane
+    positions = np.array([landmarks.landmarks[i].position for i in order], dtype=float).reshape(-1, 3)
+    distances, vertices = cKDTree(points).query(positions)
+    sorted_at = np.argsort(vertices, kind="stable")
+    same = np.flatnonzero(np.diff(vertices[sorted_at]) == 0)
     if same.size:
-        a, b = order[same[0]], order[same[0] + 1]
-        first, second = names[placed[a // 2][a % 2]], names[placed[b // 2][b % 2]]
-        raise LandmarkError(f"{source}: landmarks {first!r} and {second!r} both snap to vertex {flat[a]}; "
-                            "move one of them, or use a finer mesh.")
+        a, b = sorted_at[same[0]], sorted_at[same[0] + 1]
+        raise LandmarkError(f"{source}: landmarks {names[order[a]]!r} and {names[order[b]]!r} both snap to "
+                            f"vertex {vertices[a]}; move one of them, or use a finer mesh.")
     diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
-    far = distances.max(axis=1) > FAR_FROM_SURFACE * diagonal
-    if far.any():
-        shown = ", ".join(f"{names[placed[i][0]]}/{names[placed[i][1]]} ({distances[i].max():.3g})"
-                          for i in np.flatnonzero(far)[:10])
-        warnings.warn(f"{source}: pair(s) {shown} lie far from the mesh surface (more than "
+    far = np.flatnonzero(distances > FAR_FROM_SURFACE * diagonal)
+    if far.size:
+        shown = ", ".join(f"{names[order[i]]} ({distances[i]:.3g})" for i in far[:10])
+        warnings.warn(f"{source}: {shown} lie far from the mesh surface (more than "
                       f"{FAR_FROM_SURFACE:.0%} of the diagonal); check the file's coordinate system "
                       "(--mesh-frame) and units.", SymblendWarning, stacklevel=2)
-    ids = np.arange(1, len(placed) + 1)
-    return SnappedPairs(LandmarkPairs(ids, vertices[:, 0], vertices[:, 1]),
-                        [(names[a], names[b]) for a, b in placed], distances, unplaced)
-
-
-def pair_labels(n_vertices: int, pairs: LandmarkPairs) -> np.ndarray:
-    """The pair attribute (N,): +k on left vertices, -k on right ones, 0 elsewhere."""
-    labels = np.zeros(n_vertices)
-    labels[pairs.left], labels[pairs.right] = pairs.ids, -pairs.ids
-    return labels
+    count = 2 * len(placed)
+    pair_vertices = vertices[:count].reshape(-1, 2)
+    pairs = LandmarkPairs(np.arange(1, len(placed) + 1), pair_vertices[:, 0], pair_vertices[:, 1],
+                          vertices[count:])
+    return SnappedPairs(pairs, [(names[a], names[b]) for a, b in placed], [names[i] for i in on_plane],
+                        distances[:count].reshape(-1, 2), unplaced)

@@ -98,7 +98,7 @@ def _landmark_weights(name: str, weights, count: int, ids) -> np.ndarray:
         raise LandmarkError(f"`{name}` must have one weight per pair ({count}), got {len(weights)}.")
     bad = ~((weights >= 0) & (weights <= 1))
     if bad.any():
-        raise LandmarkError(f"`{name}` must lie in [0, 1]; pair {ids[bad][0]} has {weights[bad][0]!r}. "
+        raise LandmarkError(f"`{name}` must lie in [0, 1]; pair {ids[bad][0]} has {weights[bad][0]:g}. "
                             "Use 0 for a missing or broken landmark, 1 for a sound one.")
     return weights
 

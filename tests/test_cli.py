@@ -131,3 +131,27 @@ def test_ascii_ply_properties(tmp_path):
                     "property float z\nproperty double symblend_pair\nelement face 0\n"
                     "property list uchar int vertex_indices\nend_header\n0 0 0 1\n1 0 0 -1\n")
     assert read_ply_vertex_properties(path)["symblend_pair"].tolist() == [1.0, -1.0]
+
+
+def test_midline_and_missing_options(tmp_path, bent_cow_files, cow):
+    from test_ground_truth import midline_vertices
+
+    mesh_path, landmark_path, deformed, left, right = bent_cow_files
+    landmarks = read_landmarks(landmark_path)
+    midline = midline_vertices(cow, 6)
+    landmarks.landmarks += [Landmark(f"mid_{j}", tuple(deformed[v])) for j, v in enumerate(midline)]
+    with_midline = tmp_path / "with_midline.pp"
+    write_landmarks(with_midline, landmarks)
+    output, report = tmp_path / "out.ply", tmp_path / "r.json"
+    assert main(["symmetrize", str(mesh_path), "-l", str(with_midline), "-o", str(output)]) == 1
+    assert main(["symmetrize", str(mesh_path), "-l", str(with_midline), "-o", str(output), "--midline",
+                 "--missing", "R_3,R_4", "--report", str(report)]) == 0
+    data = json.loads(report.read_text())
+    assert data["midline_count"] == 6 and data["landmarks"]["missing"] == ["R_3", "R_4"]
+    ms = pymeshlab.MeshSet()
+    from filter_symblend.ply_attributes import load_mesh_with_attributes
+
+    assert "symblend_weight" in load_mesh_with_attributes(ms, output)
+    out = ms.current_mesh().vertex_matrix()
+    normal, offset = np.array(data["plane_normal"]), data["plane_offset"]
+    assert np.abs(out[midline] @ normal - offset).max() < 1e-9

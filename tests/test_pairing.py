@@ -5,7 +5,8 @@ import pytest
 
 from filter_symblend import LandmarkError, SymblendWarning
 from filter_symblend.landmark_files import Landmark, LandmarkFileError, LandmarkSet
-from filter_symblend.pairing import pair_by_name, pair_labels, read_pair_table, snap_pairs
+from filter_symblend.attributes import pair_labels
+from filter_symblend.pairing import pair_by_name, read_pair_table, snap_pairs
 
 
 def test_pairing_by_name_conventions():
@@ -50,7 +51,7 @@ def test_snapping_reports_distances_and_skips_unplaced_pairs():
     points = grid_points()
     landmarks = LandmarkSet([Landmark("L_a", (1.0, 0.05, 0.0)), Landmark("R_a", (-1.0, 0.0, 0.02)),
                              Landmark("L_b", (1.0, 2.0, 1.0)), Landmark("R_b", (0, 0, 0), placed=False)])
-    with pytest.warns(SymblendWarning, match=r"pair\(s\) L_b/R_b have a landmark marked as not placed"):
+    with pytest.warns(SymblendWarning, match=r"L_b/R_b have a landmark marked as not placed"):
         snapped = snap_pairs(points, landmarks, [(0, 1), (2, 3)], [])
     assert snapped.pairs.left.tolist() == [6] and snapped.pairs.right.tolist() == [0]
     np.testing.assert_allclose(snapped.snap_distances, [[0.05, 0.02]])
@@ -63,8 +64,19 @@ def test_snapping_errors_and_warnings():
                          Landmark("L_b", (1.0, 0.01, 0.0)), Landmark("R_b", (-1.0, 2.0, 1.0))])
     with pytest.raises(LandmarkError, match=r"landmarks 'L_a' and 'L_b' both snap to vertex 6"):
         snap_pairs(points, clash, [(0, 1), (2, 3)], [])
-    with pytest.raises(LandmarkError, match=r"1 landmark\(s\) have no partner: 'nasion'"):
+    with pytest.raises(LandmarkError, match=r"1 landmark\(s\) have no partner: 'nasion'.*\(--midline\)"):
         snap_pairs(points, LandmarkSet([Landmark("nasion", (0, 0, 0))]), [], [0])
     far = LandmarkSet([Landmark("L_a", (1.0, 0.0, -5.0)), Landmark("R_a", (-1.0, 0.0, 0.0))])
-    with pytest.warns(SymblendWarning, match=r"L_a/R_a \(5\) lie far from the mesh surface.*--mesh-frame"):
+    with pytest.warns(SymblendWarning, match=r"L_a \(5\) lie far from the mesh surface.*--mesh-frame"):
         snap_pairs(points, far, [(0, 1)], [])
+
+
+def test_unpaired_landmarks_become_midline_landmarks_when_asked():
+    points = np.vstack([grid_points(), [0.0, 1.0, 0.5]])
+    landmarks = LandmarkSet([Landmark("L_a", (1.0, 0.0, 0.0)), Landmark("R_a", (-1.0, 0.0, 0.0)),
+                             Landmark("nasion", (0.0, 1.0, 0.45))])
+    snapped = snap_pairs(points, landmarks, [(0, 1)], [2], midline=True)
+    assert snapped.pairs.midline.tolist() == [12] and snapped.midline_names == ["nasion"]
+    assert snapped.weights(["R_a"])[1].tolist() == [0.0]
+    with pytest.raises(LandmarkError, match=r"--missing names 'R_b', which no pair has"):
+        snapped.weights(["R_b"])

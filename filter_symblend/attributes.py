@@ -1,0 +1,79 @@
+"""Landmarks as per-vertex custom scalar attributes of a pymeshlab mesh: write and read.
+
+Encodings (attribute names are the filter's parameters; defaults shown):
+- ``symblend_pair``: +k on the left vertex of pair k, -k on the right one, 0 elsewhere.
+- ``symblend_midline``: non-zero on midline landmarks (they end up on the symmetry plane).
+- ``symblend_weight``: in [0, 1] at each landmark (1 elsewhere); 0 marks a missing or
+  broken landmark, whose side then takes the mirror shape of the other side.
+Midline and weight attributes are optional.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pymeshlab
+
+from .errors import LandmarkError
+from .landmarks import LandmarkPairs, pairs_from_attribute
+from .parameters import DEFAULTS
+
+
+def optional_attribute(mesh: pymeshlab.Mesh, name: str) -> np.ndarray | None:
+    """The per-vertex custom scalar attribute ``name`` (N,), or None when the mesh has none."""
+    try:
+        return mesh.vertex_custom_scalar_attribute_array(name)
+    except pymeshlab.PyMeshLabException:
+        return None
+
+
+def pair_labels(n_vertices: int, pairs: LandmarkPairs) -> np.ndarray:
+    """The pair attribute (N,): +k on left vertices, -k on right ones, 0 elsewhere."""
+    labels = np.zeros(n_vertices)
+    labels[pairs.left], labels[pairs.right] = pairs.ids, -pairs.ids
+    return labels
+
+
+def write_landmark_attributes(mesh: pymeshlab.Mesh, pairs: LandmarkPairs, left_weights=None,
+                              right_weights=None, pair_attribute: str = DEFAULTS["pair_attribute"],
+                              midline_attribute: str = DEFAULTS["midline_attribute"],
+                              weight_attribute: str = DEFAULTS["weight_attribute"]) -> None:
+    """Add the pair attribute, and the midline and weight attributes when there are any, to
+    ``mesh`` (a mesh of a MeshSet: add attributes after ``ms.add_mesh``, not before)."""
+    n = mesh.vertex_number()
+    mesh.add_vertex_custom_scalar_attribute(pair_labels(n, pairs), pair_attribute)
+    if len(pairs.midline):
+        midline = np.zeros(n)
+        midline[pairs.midline] = np.arange(1, len(pairs.midline) + 1)
+        mesh.add_vertex_custom_scalar_attribute(midline, midline_attribute)
+    if left_weights is not None or right_weights is not None:
+        weights = np.ones(n)
+        weights[pairs.left] = 1.0 if left_weights is None else left_weights
+        weights[pairs.right] = 1.0 if right_weights is None else right_weights
+        mesh.add_vertex_custom_scalar_attribute(weights, weight_attribute)
+
+
+def read_landmark_attributes(mesh: pymeshlab.Mesh, pair_attribute: str = DEFAULTS["pair_attribute"],
+                             midline_attribute: str = DEFAULTS["midline_attribute"],
+                             weight_attribute: str = DEFAULTS["weight_attribute"]):
+    """(pairs with midline, left weights (n,) or None, right weights (n,) or None) from ``mesh``."""
+    values = optional_attribute(mesh, pair_attribute)
+    if values is None:
+        raise LandmarkError(
+            f"The current mesh ('{mesh.label()}') has no per-vertex custom scalar attribute "
+            f"`{pair_attribute}`. Add the pairs first: "
+            f"ms.current_mesh().add_vertex_custom_scalar_attribute(labels, '{pair_attribute}') with "
+            "+k on the left vertex of pair k, -k on the right one and 0 elsewhere (or "
+            "filter_symblend.attributes.write_landmark_attributes), or name your attribute "
+            "with `pair_attribute`.")
+    pairs = pairs_from_attribute(values, pair_attribute)
+    midline_values = optional_attribute(mesh, midline_attribute)
+    if midline_values is not None:
+        pairs = LandmarkPairs(pairs.ids, pairs.left, pairs.right, np.flatnonzero(midline_values))
+    weights = optional_attribute(mesh, weight_attribute)
+    if weights is None:
+        return pairs, None, None
+    off = pairs.midline[weights[pairs.midline] != 1]
+    if off.size:
+        raise LandmarkError(f"Midline landmark on vertex {off[0]} has weight {weights[off[0]]:g} in "
+                            f"`{weight_attribute}`; midline landmarks take no weight (set 1).")
+    return pairs, weights[pairs.left], weights[pairs.right]
