@@ -42,12 +42,19 @@ def _add_landmark_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--pairs", type=pathlib.Path,
                         help="pair table: two-column CSV of landmark names or 1-based numbers (left, right); "
                              "default: pair by name (L_/R_ prefixes, _left/_right suffixes, any case)")
+    parser.add_argument("--side-words", default="l,left,lt/r,right,rt", metavar="LEFT,.../RIGHT,...",
+                        help="words that mark the left and the right side in landmark names, as a prefix "
+                             "or a suffix (any case, separated by _ - . or a space); default: %(default)s")
     parser.add_argument("--midline", action="store_true",
                         help="treat landmarks without a partner as midline landmarks (held on the "
                              "symmetry plane); without it they are an error")
     parser.add_argument("--mesh-frame", choices=FRAMES, default="LPS",
                         help="coordinate system of the mesh, used only when the landmark file states one "
                              "(Slicer files); default: %(default)s, as Slicer saves models")
+
+
+def _one_line(error: Exception) -> str:
+    return " ".join(str(error).split())
 
 
 def _load_mesh(path: pathlib.Path):
@@ -61,7 +68,7 @@ def _load_mesh(path: pathlib.Path):
     try:
         load_mesh_with_attributes(ms, path)
     except pymeshlab.PyMeshLabException as error:
-        raise SymblendError(f"{path}: pymeshlab cannot read it ({error}).") from None
+        raise SymblendError(f"{path}: pymeshlab cannot read it ({_one_line(error)}).") from None
     return ms
 
 
@@ -76,7 +83,10 @@ def _snapped_pairs(ms, args):
         paired = {i for pair in index_pairs for i in pair}
         unpaired = [i for i in range(len(names)) if i not in paired]
     else:
-        index_pairs, unpaired = pair_by_name(names)
+        left_words, _, right_words = args.side_words.lower().partition("/")
+        if not left_words or not right_words:
+            raise SymblendError(f"--side-words {args.side_words!r}: give LEFT,.../RIGHT,..., e.g. l,left/r,right.")
+        index_pairs, unpaired = pair_by_name(names, tuple(left_words.split(",")), tuple(right_words.split(",")))
     snapped = snap_pairs(ms.current_mesh().vertex_matrix(), landmarks, index_pairs, unpaired,
                          midline=args.midline, source=str(args.landmarks))
     return snapped, frame_note
@@ -94,7 +104,7 @@ def _save_atomically(ms, output: pathlib.Path, attributes: list[str]) -> None:
         ms.save_current_mesh(str(temporary), **options)
         os.replace(temporary, output)
     except pymeshlab.PyMeshLabException as error:
-        raise SymblendError(f"{output}: pymeshlab cannot write it ({error}).") from None
+        raise SymblendError(f"{output}: pymeshlab cannot write it ({_one_line(error)}).") from None
     finally:
         temporary.unlink(missing_ok=True)
 
@@ -105,6 +115,8 @@ def _symmetrize(args) -> int:
     from .meshset_filter import ASYMMETRY_ATTRIBUTE, generate_symmetrized_mesh
 
     params = {p.name: getattr(args, p.name) for p in PARAMETERS}
+    if not args.output.parent.is_dir():
+        raise SymblendError(f"{args.output}: the folder {args.output.parent} does not exist; create it first.")
     ms = _load_mesh(args.input)
     snapped, frame_note = _snapped_pairs(ms, args)
     missing = [name.strip() for name in args.missing.split(",") if name.strip()]
@@ -193,7 +205,7 @@ def main(argv=None) -> int:
             warnings.showwarning = lambda message, *rest: print(f"symblend: warning: {message}", file=sys.stderr)
             return args.handler(args)
     except SymblendError as error:
-        print(f"symblend: error: {error}", file=sys.stderr)
+        print(f"symblend: error: {_one_line(error)}", file=sys.stderr)
         return 1
     except OSError as error:
         print(f"symblend: error: {error.filename}: {error.strerror}", file=sys.stderr)

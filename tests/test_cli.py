@@ -155,3 +155,20 @@ def test_midline_and_missing_options(tmp_path, bent_cow_files, cow):
     out = ms.current_mesh().vertex_matrix()
     normal, offset = np.array(data["plane_normal"]), data["plane_offset"]
     assert np.abs(out[midline] @ normal - offset).max() < 1e-9
+
+
+def test_unreadable_mesh_unwritable_output_and_side_words(tmp_path, bent_cow_files, capsys):
+    mesh_path, landmark_path, *_ = bent_cow_files
+    garbage = tmp_path / "garbage.ply"
+    garbage.write_text("not a mesh")
+    assert main(["symmetrize", str(garbage), "-l", str(landmark_path), "-o", str(tmp_path / "o.ply")]) == 1
+    assert "garbage.ply: pymeshlab cannot read it" in capsys.readouterr().err
+    assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "-o",
+                 str(tmp_path / "no_such_dir" / "o.ply")]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("symblend: error:") and "no_such_dir does not exist; create it first" in err
+    assert err.count("\n") == 1
+    assert not (tmp_path / "no_such_dir").exists()
+    assert main(["landmarks", "check", str(mesh_path), "-l", str(landmark_path), "--side-words", "left"]) == 1
+    assert "--side-words 'left': give LEFT,.../RIGHT,..." in capsys.readouterr().err
+    assert main(["landmarks", "check", str(mesh_path), "-l", str(landmark_path), "--side-words", "L/R"]) == 0

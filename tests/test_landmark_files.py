@@ -113,3 +113,16 @@ def test_unreadable_files_name_the_file_and_the_place(tmp_path, name, text, patt
 def test_missing_file(tmp_path):
     with pytest.raises(LandmarkFileError, match=r"nothere.pp: cannot be read"):
         read_landmarks(tmp_path / "nothere.pp")
+
+
+@pytest.mark.parametrize("name, text, pattern", [
+    ("inf.csv", "name,x,y,z\na,inf,0,0\n", r"inf.csv, line 2: coordinate 'inf' is not finite"),
+    ("short.pts", "A 1 2\n", r"short.pts, point 1: expected 'name x y z', got 'A 1 2'"),
+    ("two.mrk.json", '{"markups": [{"controlPoints": [{"label": "a", "position": [1, 2]}]}]}',
+     r"control point 1 \(a\): position must have 3 coordinates"),
+])
+def test_more_malformed_files(tmp_path, name, text, pattern):
+    path = tmp_path / name
+    path.write_text(text)
+    with pytest.raises(LandmarkFileError, match=pattern):
+        read_landmarks(path)

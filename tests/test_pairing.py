@@ -80,3 +80,12 @@ def test_unpaired_landmarks_become_midline_landmarks_when_asked():
     assert snapped.weights(["R_a"])[1].tolist() == [0.0]
     with pytest.raises(LandmarkError, match=r"--missing names 'R_b', which no pair has"):
         snapped.weights(["R_b"])
+
+
+def test_pair_table_errors(tmp_path):
+    table = tmp_path / "pairs.csv"
+    table.write_text("a1\n")
+    with pytest.raises(LandmarkFileError, match=r"line 1: expected two columns \(left, right\)"):
+        read_pair_table(table, ["a1"])
+    with pytest.raises(LandmarkFileError, match=r"none.csv: cannot be read"):
+        read_pair_table(tmp_path / "none.csv", ["a1"])
