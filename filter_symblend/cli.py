@@ -109,6 +109,13 @@ def _save_atomically(ms, output: pathlib.Path, attributes: list[str]) -> None:
         temporary.unlink(missing_ok=True)
 
 
+def _terminal_progress(percent: float, message: str) -> None:
+    """A one-line progress display on a terminal, rewritten in place."""
+    bar = "#" * int(percent / 5)
+    print(f"\r[{bar:<20}] {percent:3.0f}% {message:<40}", end="\n" if percent >= 100 else "",
+          file=sys.stderr, flush=True)
+
+
 def _symmetrize(args) -> int:
     from .hausdorff import two_way_hausdorff
     from .attributes import optional_attribute, write_landmark_attributes
@@ -123,7 +130,7 @@ def _symmetrize(args) -> int:
     left_weights, right_weights = snapped.weights(missing) if missing else (None, None)
     write_landmark_attributes(ms.current_mesh(), snapped.pairs, left_weights, right_weights,
                               params["pair_attribute"], params["midline_attribute"], params["weight_attribute"])
-    report = generate_symmetrized_mesh(ms, **params)
+    report = generate_symmetrized_mesh(ms, _terminal_progress if sys.stderr.isatty() else None, **params)
     report["hausdorff_input_output"] = two_way_hausdorff(ms, report["input_mesh_id"], report["output_mesh_id"])
     report["landmarks"] = {"file": str(args.landmarks), "frame": frame_note,
                            "pairs": [list(p) for p in snapped.pair_names],

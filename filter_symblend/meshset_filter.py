@@ -62,7 +62,7 @@ def _add_output_layer(ms: pymeshlab.MeshSet, input_id: int, result, carried: dic
         raise
 
 
-def generate_symmetrized_mesh(ms: pymeshlab.MeshSet, **params) -> dict:
+def generate_symmetrized_mesh(ms: pymeshlab.MeshSet, progress=None, **params) -> dict:
     options = validate_parameters(params)
     if ms.mesh_number() == 0:
         raise MeshSetError(
@@ -73,15 +73,16 @@ def generate_symmetrized_mesh(ms: pymeshlab.MeshSet, **params) -> dict:
     attributes = {name: options.pop(name) for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
     pairs, left_weights, right_weights = read_landmark_attributes(mesh, **attributes)
     result = symmetrize(mesh.vertex_matrix(), pairs.left, pairs.right, pairs.ids, pairs.midline,
-                        left_weights, right_weights, **options)
+                        left_weights, right_weights, progress, **options)
     carried = {name: values for name in attributes.values()
                if (values := optional_attribute(mesh, name)) is not None}
     output_id = _add_output_layer(ms, input_id, result, carried)
     return {**result.report, "input_mesh_id": input_id, "output_mesh_id": output_id}
 
 
+_PROGRESS = inspect.Parameter("progress", inspect.Parameter.KEYWORD_ONLY, default=None)
 generate_symmetrized_mesh.__signature__ = keyword_signature(
-    inspect.Parameter("ms", inspect.Parameter.POSITIONAL_ONLY))
+    inspect.Parameter("ms", inspect.Parameter.POSITIONAL_ONLY), _PROGRESS)
 generate_symmetrized_mesh.__doc__ = f"""{DISPLAY_NAME}.
 
 Symmetrizes the current mesh from the landmark pairs in its per-vertex scalar
@@ -96,6 +97,8 @@ is never modified; on error the MeshSet is left exactly as it was.
 Parameters
 ----------
 {parameters_doc()}
+progress : callable(percent: float, message: str), optional
+    Called at each stage (not a filter parameter: it is not saved in scripts).
 
 Returns
 -------
@@ -105,15 +108,15 @@ dict
 """
 
 
-def _meshset_method(self, **params):
-    return generate_symmetrized_mesh(self, **params)
+def _meshset_method(self, progress=None, **params):
+    return generate_symmetrized_mesh(self, progress, **params)
 
 
 _meshset_method.__name__ = FILTER_NAME
 _meshset_method.__qualname__ = f"MeshSet.{FILTER_NAME}"
 _meshset_method.__doc__ = generate_symmetrized_mesh.__doc__
 _meshset_method.__signature__ = keyword_signature(
-    inspect.Parameter("self", inspect.Parameter.POSITIONAL_ONLY))
+    inspect.Parameter("self", inspect.Parameter.POSITIONAL_ONLY), _PROGRESS)
 
 
 def bind_to_meshset() -> None:

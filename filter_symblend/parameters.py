@@ -169,7 +169,7 @@ def parameters_doc(adapter: bool = True) -> str:
 
 
 def keyword_signature(*leading: inspect.Parameter, adapter: bool = True) -> inspect.Signature:
-    """A signature with ``leading`` parameters and one keyword per declared parameter."""
+    """A signature with ``leading`` parameters, then one keyword per declared parameter."""
     keywords = [
         inspect.Parameter(p.name, inspect.Parameter.KEYWORD_ONLY, default=p.default)
         for p in PARAMETERS if adapter or not p.adapter_only

@@ -103,9 +103,15 @@ def _landmark_weights(name: str, weights, count: int, ids) -> np.ndarray:
     return weights
 
 
+def _report_progress(progress, percent: float, message: str) -> None:
+    if progress is not None:
+        progress(percent, message)
+
+
 def symmetrize(points, left, right, pair_ids=None, midline=None, left_weights=None, right_weights=None,
-               **params) -> SymmetrizationResult:
+               progress=None, **params) -> SymmetrizationResult:
     clock = {"start": time.perf_counter()}
+    _report_progress(progress, 0.0, "checking landmarks")
     options = validate_parameters(params, adapter=False)
     points = check_points(points)
     left, right = _integer_indices("left", left), _integer_indices("right", right)
@@ -145,10 +151,12 @@ def symmetrize(points, left, right, pair_ids=None, midline=None, left_weights=No
     if (wl * wr != 1).any():  # a broken side must not shape the local symmetries around it
         theta = sp.csr_matrix(theta @ sp.diags(wl * wr))
     clock["neighbourhoods"] = time.perf_counter()
+    _report_progress(progress, 10.0, f"local symmetries ({options['mode']})")
 
     local = local_symmetries(options["mode"], theta, p0, q0, labels)
     _warn_about_local_fits(local, p0, q0, labels, options["mode"])
     clock["local_transforms"] = time.perf_counter()
+    _report_progress(progress, 25.0, f"global solve ({n + m} pairs)")
 
     # Pre-align: the mean local normal goes to -x, so the smallest rotations Q_i
     # of Step 2 are taken relative to the global symmetry and the result does not
@@ -160,6 +168,7 @@ def symmetrize(points, left, right, pair_ids=None, midline=None, left_weights=No
     solved = np.vstack([r[:n], s[:n], r[n:]])
     rotation, translation = rigid_fit(solved, landmarks, np.concatenate([wl[:n], wr[:n], np.ones(m)]))
     clock["global_solve"] = time.perf_counter()
+    _report_progress(progress, 50.0, f"warping {len(points)} vertices")
 
     target = solved @ rotation.T + translation
     warped = thin_plate_spline_warp(landmarks, target, points)
@@ -173,6 +182,7 @@ def symmetrize(points, left, right, pair_ids=None, midline=None, left_weights=No
         normal = rotation[:, 0]
         offset = float(normal @ translation)
     clock["warp"] = time.perf_counter()
+    _report_progress(progress, 100.0, "done")
 
     report = {
         "pair_count": int(n),
@@ -208,7 +218,8 @@ def symmetrize(points, left, right, pair_ids=None, midline=None, left_weights=No
 symmetrize.__signature__ = keyword_signature(
     *(inspect.Parameter(name, inspect.Parameter.POSITIONAL_OR_KEYWORD, default=default)
       for name, default in (("points", inspect.Parameter.empty), ("left", inspect.Parameter.empty),
-                            ("right", inspect.Parameter.empty), ("pair_ids", None))),
+                            ("right", inspect.Parameter.empty), ("pair_ids", None), ("midline", None),
+                            ("left_weights", None), ("right_weights", None), ("progress", None))),
     adapter=False)
 symmetrize.__doc__ = f"""Symmetrize ``points`` (N, 3) so that each pair (left[k], right[k]) becomes mirror-symmetric.
 
@@ -230,6 +241,9 @@ midline : (m,) int array, optional
 left_weights, right_weights : (n,) float arrays in [0, 1], optional
     How much each landmark's input geometry counts (default 1). 0 marks a
     missing or broken side: it becomes the mirror image of the other side.
+progress : callable(percent: float, message: str), optional
+    Called at the start of each stage, as MeshLab filters report progress.
+    An exception it raises (or Ctrl-C) stops the run; nothing is changed.
 {parameters_doc(adapter=False)}
 
 Returns

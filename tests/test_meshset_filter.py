@@ -17,8 +17,8 @@ def test_import_binds_the_filter_onto_meshset_with_the_declared_parameters():
     method = pymeshlab.MeshSet.generate_symmetrized_mesh
     declared = {p.name: p.default for p in PARAMETERS}
     signature = inspect.signature(method)
-    assert {name: p.default for name, p in signature.parameters.items() if name != "self"} == declared
-    assert inspect.signature(filter_symblend.generate_symmetrized_mesh).parameters.keys() - {"ms"} == declared.keys()
+    assert {name: p.default for name, p in signature.parameters.items() if name != "self"} == {**declared, "progress": None}
+    assert inspect.signature(filter_symblend.generate_symmetrized_mesh).parameters.keys() - {"ms", "progress"} == declared.keys()
     for p in PARAMETERS:
         assert f"{p.name} : {p.kind} = {p.default!r}" in method.__doc__
     assert filter_symblend.DISPLAY_NAME in method.__doc__
@@ -121,3 +121,27 @@ def test_function_form_equals_method_form(cow):
     first.generate_symmetrized_mesh(alpha=0.1)
     filter_symblend.generate_symmetrized_mesh(second, alpha=0.1)
     np.testing.assert_array_equal(first.current_mesh().vertex_matrix(), second.current_mesh().vertex_matrix())
+
+
+def test_progress_is_reported_in_order(bent_cow_meshset):
+    ms, *_ = bent_cow_meshset
+    calls = []
+    ms.generate_symmetrized_mesh(progress=lambda percent, message: calls.append((percent, message)))
+    percents = [p for p, _ in calls]
+    assert percents == sorted(percents) and percents[0] == 0 and percents[-1] == 100
+    assert any("global solve" in m for _, m in calls) and any("warping 2904 vertices" in m for _, m in calls)
+
+
+def test_interrupting_from_progress_leaves_the_meshset_unchanged(bent_cow_meshset):
+    from test_validation import assert_unchanged, snapshot
+
+    ms, *_ = bent_cow_meshset
+    before = snapshot(ms)
+
+    def interrupt(percent, message):
+        if percent >= 50:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        ms.generate_symmetrized_mesh(progress=interrupt)
+    assert_unchanged(ms, before)
