@@ -16,7 +16,7 @@ import inspect
 import pymeshlab
 
 from .attributes import optional_attribute, read_landmark_attributes
-from .errors import MeshSetError
+from .errors import MeshSetError, ParameterError
 from .parameters import keyword_signature, parameters_doc, validate_parameters
 from .symmetrize import symmetrize
 
@@ -71,6 +71,11 @@ def generate_symmetrized_mesh(ms: pymeshlab.MeshSet, progress=None, **params) ->
     input_id = ms.current_mesh_id()
     mesh = ms.current_mesh()
     attributes = {name: options.pop(name) for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
+    names = list(attributes.values())
+    if len(set(names)) < len(names) or ASYMMETRY_ATTRIBUTE in names:
+        raise ParameterError(
+            f"`pair_attribute`, `midline_attribute` and `weight_attribute` must be three different "
+            f"names, none of them `{ASYMMETRY_ATTRIBUTE}` (the filter writes it); got {', '.join(names)}.")
     pairs, left_weights, right_weights = read_landmark_attributes(mesh, **attributes)
     result = symmetrize(mesh.vertex_matrix(), pairs.left, pairs.right, pairs.ids, pairs.midline,
                         left_weights, right_weights, progress, **options)
