@@ -165,7 +165,7 @@ def main(argv=None) -> None:
     parser.add_argument("--repeat", type=int, default=3, help="runs per cell for the timings")
     parser.add_argument("--meshes", nargs="+", default=list(MESHES), choices=list(MESHES))
     parser.add_argument("--scale", action="store_true", help="speed and memory at scale, and Table 1")
-    parser.add_argument("--levels", type=int, default=3, help="--scale: subdivisions of the cow (3: 743k vertices)")
+    parser.add_argument("--levels", type=int, default=4, help="--scale: subdivisions of the cow (4: 743k vertices)")
     parser.add_argument("--scale-pairs", type=int, nargs="+", default=[100, 1000, 10000, 100000])
     parser.add_argument("--mesh-pairs", type=int, default=1000, help="--scale: pairs for the mesh-size rows")
     args = parser.parse_args(argv)
