@@ -94,12 +94,12 @@ def _snapped_pairs(ms, args):
 
 def _save_atomically(ms, output: pathlib.Path, attributes: list[str]) -> None:
     """Save the current mesh to a temporary name beside ``output``, then rename it."""
+    import pymeshlab
+
     temporary = output.with_name(f".{output.stem}.symblend-partial{output.suffix}")
     options = {}
     if output.suffix.lower() == ".ply":
         options = {"save_vertex_quality": True, **{f"__ca_vs__{name.lower()}": True for name in attributes}}
-    import pymeshlab
-
     try:
         ms.save_current_mesh(str(temporary), **options)
         os.replace(temporary, output)
@@ -117,8 +117,8 @@ def _terminal_progress(percent: float, message: str) -> None:
 
 
 def _symmetrize(args) -> int:
-    from .hausdorff import two_way_hausdorff
     from .attributes import optional_attribute, write_landmark_attributes
+    from .hausdorff import two_way_hausdorff
     from .meshset_filter import ASYMMETRY_ATTRIBUTE, generate_symmetrized_mesh
 
     params = {p.name: getattr(args, p.name) for p in PARAMETERS}
