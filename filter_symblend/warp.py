@@ -2,21 +2,13 @@
 
 In 3D the thin-plate (biharmonic) kernel is r, i.e. scipy's RBFInterpolator
 with kernel="linear" (phi(r) = -r) and a degree-1 polynomial, which reproduces
-any affine map exactly. scipy evaluates it in memory-bounded chunks; large
-point sets are split across threads (scipy's evaluation releases the GIL:
-measured 1.5-2x on 2 cores, results identical).
+any affine map exactly. scipy evaluates it in memory-bounded chunks.
 """
 
 from __future__ import annotations
 
-import os
-from concurrent.futures import ThreadPoolExecutor
-
 import numpy as np
 from scipy.interpolate import RBFInterpolator
-
-THREADS = os.cpu_count() or 1
-POINTS_PER_TASK = 20000  # below this a single call is cheaper than threads
 
 
 def thin_plate_spline_warp(source: np.ndarray, target: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -27,9 +19,4 @@ def thin_plate_spline_warp(source: np.ndarray, target: np.ndarray, points: np.nd
     the rounding of its dense (k + 4) x (k + 4) solve.
     """
     displacement = RBFInterpolator(source, target - source, kernel="linear", degree=1)
-    tasks = min(len(points) // POINTS_PER_TASK, 4 * THREADS)
-    if THREADS == 1 or tasks < 2:
-        return points + displacement(points)
-    with ThreadPoolExecutor(THREADS) as pool:
-        moved = np.vstack(list(pool.map(displacement, np.array_split(points, tasks))))
-    return points + moved
+    return points + displacement(points)

@@ -208,17 +208,3 @@ def test_iterative_solve_equals_the_dense_one(monkeypatch):
     iterative = global_solve(phi, p, q, local, alpha=0.01)
     assert phi.nnz < 0.5 * 300 * 300, "the test must exercise a sparse system"
     np.testing.assert_allclose(iterative[0], dense[0], atol=1e-10)
-
-
-def test_threaded_warp_equals_a_single_evaluation(monkeypatch):
-    import filter_symblend.warp as warp_module
-
-    rng = np.random.default_rng(2)
-    source = rng.normal(size=(80, 3))
-    target = source + 0.1 * rng.normal(size=source.shape)
-    points = rng.normal(size=(5000, 3))
-    monkeypatch.setattr(warp_module, "POINTS_PER_TASK", 10**9)
-    single = thin_plate_spline_warp(source, target, points)
-    monkeypatch.setattr(warp_module, "POINTS_PER_TASK", 500)
-    monkeypatch.setattr(warp_module, "THREADS", 2)
-    np.testing.assert_array_equal(thin_plate_spline_warp(source, target, points), single)
