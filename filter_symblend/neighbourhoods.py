@@ -69,7 +69,7 @@ def require_connected(
     raise GeometryError(
         f"The landmark pairs fall apart into {count} groups at `{parameter}` = "
         f"{multiple:g}: pairs {id_list(isolated)} are not connected to the other "
-        f"{int(np.sum(labels == main))}. Set `{parameter}` to at least {needed:.3g} "
+        f"{int(np.sum(labels == main))}. Set `{parameter}` to {needed:.3g} or more, "
         f"or place pairs between the groups. A pair whose two landmarks are not near its "
         f"neighbours' landmarks on both sides (e.g. joined to the wrong vertex) is isolated "
         f"too: check it."
@@ -77,11 +77,12 @@ def require_connected(
 
 
 def _connecting_width(left: np.ndarray, right: np.ndarray) -> float:
-    """Smallest Gaussian width h whose truncated graph connects every pair.
+    """A Gaussian width h whose truncated graph connects every pair (1% above the smallest).
 
     The longest edge of the minimum spanning tree under the pair distance
     max(|p_i-p_j|, |q_i-q_j|), found on a k-nearest-neighbour graph of the
-    stacked (p, q) coordinates, grown until it is connected.
+    stacked (p, q) coordinates, grown until it is connected: exact when that
+    graph holds the shortest bridge between the groups, an upper bound otherwise.
     """
     n = len(left)
     stacked = np.hstack([left, right])
