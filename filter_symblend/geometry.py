@@ -83,6 +83,30 @@ def similarity_fit(source: np.ndarray, target: np.ndarray) -> np.ndarray:
     return scale * a @ rotation.T + ct
 
 
+def voxel_keys(positions: np.ndarray, size: float) -> np.ndarray:
+    """One int64 key (n,) per cell of the grid of edge ``size`` anchored at the origin
+    (a 1-D unique over keys is far faster than a unique over rows)."""
+    cells = np.floor(positions / size).astype(np.int64)
+    cells -= cells.min(axis=0)
+    span = cells.max(axis=0) + 1
+    return (cells[:, 0] * span[1] + cells[:, 1]) * span[2] + cells[:, 2]
+
+
+def voxel_grid(positions: np.ndarray, target: int, steps: int = 20,
+               low: float | None = None, high: float | None = None) -> np.ndarray:
+    """Voxel keys (n,) of the finest grid, found by bisection on the cell size between
+    ``low`` and ``high`` (default: 1e-5 and 2 x the extent), whose number of occupied
+    cells does not exceed about ``target``. The count is not monotonic in the size, so
+    the bounds decide which crossing is found."""
+    extent = float(np.ptp(positions, axis=0).max()) or 1.0
+    low = 1e-5 * extent if low is None else low
+    high = 2.0 * extent if high is None else high
+    for _ in range(steps):
+        size = np.sqrt(low * high)
+        low, high = (size, high) if len(np.unique(voxel_keys(positions, size))) > target else (low, size)
+    return voxel_keys(positions, high)
+
+
 def reflection_across_plane(points: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:
     """Mirror images of ``points`` (n, 3) across the plane {x : normal . x = offset}."""
     return points - 2.0 * (points @ normal - offset)[:, None] * normal

@@ -43,8 +43,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.linalg import cho_factor, cho_solve
 
-from .geometry import minimal_rotation
+from .geometry import minimal_rotation, voxel_grid
 from .local_symmetries import LocalSymmetries
+from .neighbourhoods import scaled_weights
 
 MINUS_X = np.array([-1.0, 0.0, 0.0])
 
@@ -63,22 +64,10 @@ CG_TOLERANCE = 1e-13  # relative residual of the iterative path
 CG_MAX_ITERATIONS = 20000
 
 
-def _voxel_keys(positions: np.ndarray, size: float) -> np.ndarray:
-    """One int64 key (n,) per voxel of edge ``size`` (a 1-D unique is far faster than by rows)."""
-    cells = np.floor((positions - positions.min(axis=0)) / size).astype(np.int64)
-    span = cells.max(axis=0) + 1
-    return (cells[:, 0] * span[1] + cells[:, 1]) * span[2] + cells[:, 2]
-
-
 def aggregates(positions: np.ndarray) -> np.ndarray:
     """Labels (n,) grouping ``positions`` (n, 3) into about n/10 (at most COARSE_SIZE) voxel cells."""
     target = max(1, min(len(positions) // 10, COARSE_SIZE))
-    extent = float(np.ptp(positions, axis=0).max()) or 1.0
-    low, high = 1e-4 * extent, 2.0 * extent
-    for _ in range(20):
-        size = np.sqrt(low * high)
-        low, high = (size, high) if len(np.unique(_voxel_keys(positions, size))) > target else (low, size)
-    return np.unique(_voxel_keys(positions, high), return_inverse=True)[1].ravel()
+    return np.unique(voxel_grid(positions, target), return_inverse=True)[1].ravel()
 
 
 def _two_level_preconditioner(matrix: sp.csr_matrix, labels: np.ndarray):
@@ -161,13 +150,6 @@ def _laplacian(weights: sp.csr_matrix) -> sp.csr_matrix:
     return _plus_diagonal(-weights, np.asarray(weights.sum(axis=1)).ravel())
 
 
-def _scaled(phi: sp.csr_matrix, row: np.ndarray, column: np.ndarray) -> sp.csr_matrix:
-    """diag(row) @ phi @ diag(column), by scaling the stored values."""
-    out = phi.copy()
-    out.data *= np.repeat(row, np.diff(out.indptr)) * column[out.indices]
-    return out
-
-
 def global_solve(
     phi: sp.csr_matrix,
     left: np.ndarray,
@@ -194,8 +176,8 @@ def global_solve(
     if np.all(wl == 1) and np.all(wr == 1):
         phi_left = phi_right = phi_gap = phi_gap_t = phi
     else:
-        phi_left, phi_right = _scaled(phi, wl, wl), _scaled(phi, wr, wr)
-        phi_gap = _scaled(phi, wl, wr)  # the r_i - s_j terms; s_i - r_j use its transpose
+        phi_left, phi_right = scaled_weights(phi, wl, wl), scaled_weights(phi, wr, wr)
+        phi_gap = scaled_weights(phi, wl, wr)  # the r_i - s_j terms; s_i - r_j use its transpose
         phi_gap_t = sp.csr_matrix(phi_gap.T)
     rotations = minimal_rotation(local.normals, MINUS_X)
     a_left = rotations @ local.left_transforms

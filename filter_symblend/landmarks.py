@@ -77,6 +77,11 @@ def pairs_from_attribute(values: np.ndarray, attribute: str) -> LandmarkPairs:
     )
 
 
+def midline_labels(count: int) -> list[str]:
+    """Message labels of ``count`` midline landmarks: "midline 1", "midline 2", ..."""
+    return [f"midline {j}" for j in range(1, count + 1)]
+
+
 def _label(label) -> str:
     return label if isinstance(label, str) else f"{label:+d}"
 
@@ -105,7 +110,7 @@ def check_pairs(points: np.ndarray, pairs: LandmarkPairs) -> None:
             f"the filter needs at least {MIN_PAIRS} pairs, not all on one plane. Add pairs."
         )
     for side, ids in ((pairs.left, pairs.ids), (pairs.right, pairs.ids),
-                      (pairs.midline, [f"midline {j}" for j in range(1, len(pairs.midline) + 1)])):
+                      (pairs.midline, midline_labels(len(pairs.midline)))):
         outside = (side < 0) | (side >= len(points))
         if outside.any():
             raise LandmarkError(
@@ -121,7 +126,7 @@ def check_pairs(points: np.ndarray, pairs: LandmarkPairs) -> None:
         )
     vertices = np.concatenate([pairs.left, pairs.right, pairs.midline])
     labels = np.concatenate([pairs.ids.astype(object), -pairs.ids,
-                             [f"midline {j}" for j in range(1, len(pairs.midline) + 1)]]).astype(object)
+                             midline_labels(len(pairs.midline))]).astype(object)
     order = np.argsort(vertices, kind="stable")
     repeated = np.flatnonzero(np.diff(vertices[order]) == 0)
     if repeated.size:

@@ -9,15 +9,14 @@ import warnings
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from .asymmetry import fit_mirror_plane
 from .errors import LandmarkError, SymblendWarning, id_list
 from .geometry import minimal_rotation, normalize, rigid_fit
 from .global_solve import MINUS_X, global_solve
-from .landmarks import LandmarkPairs, check_pairs, check_points
+from .landmarks import LandmarkPairs, check_pairs, check_points, midline_labels
 from .local_symmetries import LocalSymmetries, local_symmetries
-from .neighbourhoods import mean_nearest_spacing, pair_weights, require_connected
+from .neighbourhoods import mean_nearest_spacing, pair_weights, require_connected, scaled_weights
 from .parameters import keyword_signature, parameters_doc, validate_parameters
 from .warp import thin_plate_spline_warp
 
@@ -133,7 +132,7 @@ def symmetrize(points, left, right, pair_ids=None, midline=None, left_weights=No
     # held on the plane; labels for messages.
     n, m = len(left), len(midline)
     all_left, all_right = np.concatenate([left, midline]), np.concatenate([right, midline])
-    labels = np.concatenate([ids.astype(object), [f"midline {j}" for j in range(1, m + 1)]])
+    labels = np.concatenate([ids.astype(object), midline_labels(m)])
     wl, wr = np.concatenate([wl, np.ones(m)]), np.concatenate([wr, np.ones(m)])
     on_plane = np.arange(n + m) >= n
     unique = np.concatenate([left, right, midline])  # each landmark vertex once: warp centres
@@ -149,7 +148,7 @@ def symmetrize(points, left, right, pair_ids=None, midline=None, left_weights=No
     require_connected(phi, p0, q0, labels, spacing, "phi_width", options["phi_width"])
     theta = phi if theta_h == phi_h else pair_weights(p0, q0, theta_h)
     if (wl * wr != 1).any():  # a broken side must not shape the local symmetries around it
-        theta = sp.csr_matrix(theta @ sp.diags(wl * wr))
+        theta = scaled_weights(theta, np.ones(n + m), wl * wr)
     clock["neighbourhoods"] = time.perf_counter()
     _report_progress(progress, 10.0, f"local symmetries ({options['mode']})")
 

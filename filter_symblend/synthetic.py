@@ -9,7 +9,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .asymmetry import fit_mirror_plane
-from .geometry import normalize, rotation_about_axis, similarity_fit
+from .geometry import normalize, rotation_about_axis, similarity_fit, voxel_grid
 
 
 def mirror_partners(points: np.ndarray, tolerance: float = 1e-4):
@@ -41,21 +41,30 @@ def exactly_symmetric(points: np.ndarray, offset: float, partner: np.ndarray) ->
     return out
 
 
+def _left_candidates(points: np.ndarray, offset: float, partner: np.ndarray, margin: float) -> np.ndarray:
+    """Vertices with a mirror partner at least ``margin`` x diagonal on the left (x > offset)."""
+    diagonal = np.linalg.norm(np.ptp(points, axis=0))
+    return np.flatnonzero((partner >= 0) & (points[:, 0] > offset + margin * diagonal))
+
+
+def farthest_point_sample(points: np.ndarray, count: int) -> np.ndarray:
+    """Indices (count,) into ``points`` spread by farthest-point sampling from point 0."""
+    chosen = [0]
+    distance = np.linalg.norm(points - points[0], axis=1)
+    for _ in range(count - 1):
+        chosen.append(int(np.argmax(distance)))
+        distance = np.minimum(distance, np.linalg.norm(points - points[chosen[-1]], axis=1))
+    return np.array(chosen)
+
+
 def farthest_point_pairs(points: np.ndarray, offset: float, partner: np.ndarray, count: int,
                          margin: float = 0.02):
     """``count`` pairs (left (count,), right (count,)) spread over the surface by farthest-point
     sampling of the left vertices at least ``margin`` x diagonal off the plane."""
-    diagonal = np.linalg.norm(np.ptp(points, axis=0))
-    candidates = np.flatnonzero((partner >= 0) & (points[:, 0] > offset + margin * diagonal))
+    candidates = _left_candidates(points, offset, partner, margin)
     if count > len(candidates):
         raise ValueError(f"Only {len(candidates)} mirror pairs are available, {count} asked.")
-    chosen = [0]
-    distance = np.linalg.norm(points[candidates] - points[candidates[0]], axis=1)
-    for _ in range(count - 1):
-        best = int(np.argmax(distance))
-        chosen.append(best)
-        distance = np.minimum(distance, np.linalg.norm(points[candidates] - points[candidates[best]], axis=1))
-    left = candidates[chosen]
+    left = candidates[farthest_point_sample(points[candidates], count)]
     return left, partner[left]
 
 
@@ -90,6 +99,12 @@ def rotate_region(points: np.ndarray, weights: np.ndarray, pivot, axis, angle: f
     axis = normalize(np.asarray(axis, dtype=float))
     rotations = rotation_about_axis(np.broadcast_to(axis, points.shape), angle * weights)
     return np.einsum("nij,nj->ni", rotations, points - pivot) + pivot
+
+
+def figure_1_deformation(points: np.ndarray) -> np.ndarray:
+    """The paper's Figure 1 cow: bent sideways (1.2 rad), then compressed to 65% along an
+    oblique direction with a 0.15 shear."""
+    return compress(bend(points, 1.2), [1, 1, 0], 0.65, shear=0.15)
 
 
 def random_rigid(points: np.ndarray, seed: int) -> np.ndarray:
@@ -143,15 +158,11 @@ def spread_pairs(points: np.ndarray, offset: float, partner: np.ndarray, count: 
     """About ``count`` pairs (left, right) spread evenly by a voxel grid: one left vertex per
     occupied voxel, the voxel size found by bisection. Fast where farthest-point sampling
     (O(count x N)) is not: 10^5 pairs on 10^6 vertices in about a second."""
-    diagonal = np.linalg.norm(np.ptp(points, axis=0))
-    candidates = np.flatnonzero((partner >= 0) & (points[:, 0] > offset + margin * diagonal))
+    candidates = _left_candidates(points, offset, partner, margin)
     if count >= len(candidates):
         return candidates, partner[candidates]
-    low, high = 1e-5 * diagonal, diagonal
-    for _ in range(40):
-        size = np.sqrt(low * high)
-        _, first = np.unique(np.floor(points[candidates] / size).astype(np.int64), axis=0, return_index=True)
-        low, high = (size, high) if len(first) > count else (low, size)
-    _, first = np.unique(np.floor(points[candidates] / high).astype(np.int64), axis=0, return_index=True)
+    diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
+    keys = voxel_grid(points[candidates], count, steps=40, low=1e-5 * diagonal, high=diagonal)
+    _, first = np.unique(keys, return_index=True)
     left = candidates[np.sort(first)]
     return left, partner[left]

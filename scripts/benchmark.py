@@ -59,7 +59,7 @@ def load(path: pathlib.Path):
 def scenarios(points: np.ndarray, mesh: str):
     limb = synthetic.limb_weights(points, **synthetic.LIMBS[mesh])
     yield "bend", synthetic.bend(points, 1.2), None
-    yield "bend+compression", synthetic.compress(synthetic.bend(points, 1.2), [1, 1, 0], 0.65, shear=0.15), None
+    yield "bend+compression", synthetic.figure_1_deformation(points), None
     yield "articulated", synthetic.articulate_limb(points, limb, 0.6), np.flatnonzero(limb > 0.99)
     yield "global affine", synthetic.compress(points, [1, 1, 0], 0.6, shear=0.2), None
 
@@ -91,7 +91,7 @@ def subdivided_cows(levels: int):
 
 def scale_steps(points, offset, partner, counts):
     """Steps 1 + 2 per stage against the pair count, on one large mesh (affine mode)."""
-    deformed = synthetic.compress(synthetic.bend(points, 1.2), [1, 1, 0], 0.65, shear=0.15)
+    deformed = synthetic.figure_1_deformation(points)
     print(f"\nSteps 1 + 2 on a bent, compressed cow of {len(points):,} vertices (standard mode; seconds, "
           "peak MB of numpy allocations)")
     print("| pairs | neighbourhoods s | MB | local s | MB | solve s | MB | steps 1+2 s |")
@@ -122,7 +122,7 @@ def scale_meshes(cows, count):
     print("|---|---|---|---|---|---|")
     for points, offset, partner in cows:
         left, right = synthetic.spread_pairs(points, offset, partner, count)
-        deformed = synthetic.compress(synthetic.bend(points, 1.2), [1, 1, 0], 0.65, shear=0.15)
+        deformed = synthetic.figure_1_deformation(points)
         result, ours, memory = measured(symmetrize, deformed, left, right, mode="affine")
         _, baseline, _ = measured(mirror_average, deformed, left, right)
         print(f"| {len(points):,} | {ours:.2f} | {result.report['seconds']['warp']:.2f} | {memory:.0f} | "

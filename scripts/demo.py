@@ -18,7 +18,7 @@ import pymeshlab
 import filter_symblend  # noqa: F401  (binds MeshSet.generate_symmetrized_mesh)
 from filter_symblend import synthetic
 from filter_symblend.asymmetry import fit_mirror_plane
-from filter_symblend.geometry import reflection_across_plane, similarity_fit
+from filter_symblend.geometry import similarity_fit
 from filter_symblend.hausdorff import two_way_hausdorff
 
 COW = pathlib.Path(pymeshlab.__file__).parent / "tests" / "sample_meshes" / "cow.obj"
@@ -42,7 +42,7 @@ def main(argv=None) -> None:
     offset, partner = synthetic.mirror_partners(original.vertex_matrix())
     symmetric = synthetic.exactly_symmetric(original.vertex_matrix(), offset, partner)
     left, right = synthetic.farthest_point_pairs(symmetric, offset, partner, args.pairs)
-    deformed = synthetic.compress(synthetic.bend(symmetric, 1.2), [1, 1, 0], 0.65, shear=0.15)
+    deformed = synthetic.figure_1_deformation(symmetric)
 
     faces = original.face_matrix()
     deformed_id = add_layer(ms, deformed, faces, "cow_bent_compressed")
@@ -64,7 +64,7 @@ def main(argv=None) -> None:
     for name, mesh_id in (("before", deformed_id), ("after", output_id), ("truth", reference_id)):
         vertices = ms.mesh(mesh_id).vertex_matrix()
         plane = fit_mirror_plane(vertices[left], vertices[right])
-        mirror_id = add_layer(ms, reflection_across_plane(vertices, plane.normal, plane.offset), faces, "mirror")
+        mirror_id = add_layer(ms, plane.reflect(vertices), faces, "mirror")
         truth_id = add_layer(ms, similarity_fit(symmetric, vertices), faces, "undeformed")
         print(f"  {name:8} {two_way_hausdorff(ms, mesh_id, mirror_id)['max'] / diagonal:>20.2%}"
               f" {two_way_hausdorff(ms, mesh_id, truth_id)['max'] / diagonal:>18.2%}")

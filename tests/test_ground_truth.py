@@ -177,7 +177,7 @@ def test_a_swapped_pair_is_reported(cow):
 
 def test_sound_inputs_raise_no_warning(cow):
     left, right = cow.landmarks(150)
-    deformed = synthetic.compress(synthetic.bend(cow.points, 1.2), [1, 1, 0], 0.65, shear=0.15)
+    deformed = synthetic.figure_1_deformation(cow.points)
     with warnings.catch_warnings():
         warnings.simplefilter("error", SymblendWarning)
         for mode in MODES:
@@ -186,12 +186,7 @@ def test_sound_inputs_raise_no_warning(cow):
 
 def midline_vertices(gt, count):
     on_plane = np.flatnonzero(gt.partner == np.arange(len(gt.partner)))
-    chosen = [on_plane[0]]
-    distance = np.linalg.norm(gt.points[on_plane] - gt.points[chosen[0]], axis=1)
-    for _ in range(count - 1):
-        chosen.append(on_plane[int(np.argmax(distance))])
-        distance = np.minimum(distance, np.linalg.norm(gt.points[on_plane] - gt.points[chosen[-1]], axis=1))
-    return np.array(chosen)
+    return on_plane[synthetic.farthest_point_sample(gt.points[on_plane], count)]
 
 
 @pytest.mark.parametrize("mode", MODES)
