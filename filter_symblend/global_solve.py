@@ -43,6 +43,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.linalg import cho_factor, cho_solve
 
+from .errors import GeometryError
 from .geometry import minimal_rotation, voxel_grid
 from .local_symmetries import LocalSymmetries
 from .neighbourhoods import scaled_weights
@@ -120,7 +121,7 @@ def _solve_positive_definite(matrix: sp.csr_matrix, rhs: np.ndarray, guess: np.n
         z = precondition(residual)
         rho, previous = np.einsum("ij,ij->j", residual, z), rho
         direction = z + (rho / previous) * direction
-    raise ArithmeticError(
+    raise GeometryError(
         f"The global solve did not converge in {CG_MAX_ITERATIONS} iterations; lower "
         "`phi_width` or check the landmarks for near-duplicate pairs."
     )

@@ -172,3 +172,32 @@ def test_unreadable_mesh_unwritable_output_and_side_words(tmp_path, bent_cow_fil
     assert main(["landmarks", "check", str(mesh_path), "-l", str(landmark_path), "--side-words", "left"]) == 1
     assert "--side-words 'left': give LEFT,.../RIGHT,..." in capsys.readouterr().err
     assert main(["landmarks", "check", str(mesh_path), "-l", str(landmark_path), "--side-words", "L/R"]) == 0
+
+
+@pytest.mark.parametrize("header, pattern", [
+    (b"solid cube\n", r"not a PLY file"),
+    (b"ply\nformat ascii 1.0\nelement vertex 1\n", r"has no end_header line"),
+    (b"ply\nformat ascii 1.0\nelement face 0\nelement vertex 1\nproperty float x\nend_header\n",
+     r"the vertex element must come first"),
+    (b"ply\nformat ascii 1.0\nelement vertex 1\nproperty list uchar int x\nend_header\n",
+     r"list properties on vertices are not supported"),
+    (b"ply\nformat binary_middle_endian 1.0\nelement vertex 1\nproperty float x\nend_header\n",
+     r"unknown PLY format 'binary_middle_endian'"),
+])
+def test_unreadable_ply_properties(tmp_path, header, pattern):
+    from filter_symblend import SymblendError
+    from filter_symblend.ply_attributes import read_ply_vertex_properties
+
+    path = tmp_path / "bad.ply"
+    path.write_bytes(header)
+    with pytest.raises(SymblendError, match=pattern):
+        read_ply_vertex_properties(path)
+
+
+def test_an_output_format_pymeshlab_cannot_write(tmp_path, bent_cow_files, capsys):
+    mesh_path, landmark_path, *_ = bent_cow_files
+    output = tmp_path / "out.xyzzy"
+    assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "-o", str(output)]) == 1
+    err = capsys.readouterr().err
+    assert "out.xyzzy: pymeshlab cannot write it (Unknown format for save: xyzzy)" in err and err.count("\n") == 1
+    assert not list(tmp_path.glob("*xyzzy*")) and not list(tmp_path.glob(".*partial*"))

@@ -208,3 +208,17 @@ def test_iterative_solve_equals_the_dense_one(monkeypatch):
     iterative = global_solve(phi, p, q, local, alpha=0.01)
     assert phi.nnz < 0.5 * 300 * 300, "the test must exercise a sparse system"
     np.testing.assert_allclose(iterative[0], dense[0], atol=1e-10)
+
+
+def test_a_solve_that_does_not_converge_says_so(monkeypatch):
+    import filter_symblend.global_solve as solve_module
+    from filter_symblend import GeometryError
+
+    p, q = symmetric_pairs(300, seed=6)
+    phi = pair_weights(p, q, 0.5)
+    local = local_symmetries("standard", phi, p, q, np.arange(1, 301))
+    monkeypatch.setattr(solve_module, "DENSE_SIZE", 10)
+    monkeypatch.setattr(solve_module, "DENSE_FRACTION", 1.1)
+    monkeypatch.setattr(solve_module, "CG_MAX_ITERATIONS", 2)
+    with pytest.raises(GeometryError, match=r"did not converge in 2 iterations; lower `phi_width`"):
+        global_solve(phi, p + 0.1, q, local, alpha=0.01)
