@@ -2,20 +2,24 @@
 
 Implements Ghosh, Amenta and Kazhdan, *Closed-form Blending of Local
 Symmetries* (SGP 2010). Importing the package binds
-``pymeshlab.MeshSet.generate_symmetrized_mesh``.
+``pymeshlab.MeshSet.generate_symmetrized_mesh``; ``apply_filter_script`` and
+``save_filter_script`` run and record MeshLab filter scripts that use it.
 """
 
 from .errors import (GeometryError, LandmarkError, MeshSetError, ParameterError, SymblendError,
                      SymblendWarning)
 from .meshset_filter import (ASYMMETRY_ATTRIBUTE, DISPLAY_NAME, FILTER_NAME, bind_to_meshset,
                              generate_symmetrized_mesh)
+from .mlx import ScriptError
 from .parameters import PARAMETERS
+from .script_runner import apply_filter_script, save_filter_script
 from .symmetrize import SymmetrizationResult, symmetrize
 
 bind_to_meshset()
 
 __all__ = [
     "ASYMMETRY_ATTRIBUTE", "DISPLAY_NAME", "FILTER_NAME", "PARAMETERS", "GeometryError",
-    "LandmarkError", "MeshSetError", "ParameterError", "SymblendError", "SymblendWarning",
-    "SymmetrizationResult", "generate_symmetrized_mesh", "symmetrize",
+    "LandmarkError", "MeshSetError", "ParameterError", "ScriptError", "SymblendError", "SymblendWarning",
+    "SymmetrizationResult", "apply_filter_script", "generate_symmetrized_mesh", "save_filter_script",
+    "symmetrize",
 ]

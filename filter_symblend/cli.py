@@ -1,6 +1,9 @@
-"""The ``symblend`` command: symmetrize a mesh from a landmark file, check and convert landmarks.
+"""The ``symblend`` command: symmetrize a mesh from a landmark file, run filter scripts, compare
+before and after, check and convert landmarks.
 
     symblend symmetrize INPUT -l LANDMARKS -o OUTPUT [--pairs PAIRS.csv] [--report REPORT.json] [filter options]
+    symblend mlx SCRIPT.mlx INPUT [-l LANDMARKS] -o OUTPUT [--report REPORT.json]
+    symblend report BEFORE AFTER [--png PICTURE.png] [--json NUMBERS.json]
     symblend landmarks check INPUT -l LANDMARKS [--pairs PAIRS.csv]
     symblend landmarks convert IN OUT
 
@@ -18,7 +21,7 @@ import sys
 import warnings
 
 from .errors import SymblendError
-from .parameters import PARAMETERS
+from .parameters import DEFAULTS, PARAMETERS
 
 FRAMES = ("LPS", "RAS")
 
@@ -36,8 +39,8 @@ def _add_filter_options(parser: argparse.ArgumentParser) -> None:
         group.add_argument("--" + p.name.replace("_", "-"), **options)
 
 
-def _add_landmark_options(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("-l", "--landmarks", required=True, type=pathlib.Path,
+def _add_landmark_options(parser: argparse.ArgumentParser, required: bool = True) -> None:
+    parser.add_argument("-l", "--landmarks", required=required, type=pathlib.Path,
                         help="landmark file: .pp, .fcsv, .mrk.json, .pts or .csv")
     parser.add_argument("--pairs", type=pathlib.Path,
                         help="pair table: two-column CSV of landmark names or 1-based numbers (left, right); "
@@ -53,18 +56,25 @@ def _add_landmark_options(parser: argparse.ArgumentParser) -> None:
                              "(Slicer files); default: %(default)s, as Slicer saves models")
 
 
+def _add_missing_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--missing", default="", metavar="NAME,NAME",
+                        help="landmarks on missing or broken parts (weight 0): that side takes the "
+                             "mirror shape of the other (the paper's Figure 9)")
+
+
 def _one_line(error: Exception) -> str:
     return " ".join(str(error).split())
 
 
-def _load_mesh(path: pathlib.Path):
+def _load_mesh(path: pathlib.Path, ms=None):
+    """``path`` loaded as a new layer of ``ms`` (a new MeshSet by default), PLY attributes included."""
     import pymeshlab
 
     if not path.is_file():
         raise SymblendError(f"{path}: no such mesh file.")
     from .ply_attributes import load_mesh_with_attributes
 
-    ms = pymeshlab.MeshSet()
+    ms = pymeshlab.MeshSet() if ms is None else ms
     try:
         load_mesh_with_attributes(ms, path)
     except pymeshlab.PyMeshLabException as error:
@@ -92,14 +102,18 @@ def _snapped_pairs(ms, args):
     return snapped, frame_note
 
 
-def _save_atomically(ms, output: pathlib.Path, attributes: list[str]) -> None:
-    """Save the current mesh to a temporary name beside ``output``, then rename it."""
+def _save_atomically(ms, output: pathlib.Path) -> None:
+    """Save the current mesh to a temporary name beside ``output``, then rename it. A PLY keeps
+    quality and every custom per-vertex scalar attribute."""
     import pymeshlab
 
+    if not output.parent.is_dir():
+        raise SymblendError(f"{output}: the folder {output.parent} does not exist; create it first.")
     temporary = output.with_name(f".{output.stem}.symblend-partial{output.suffix}")
     options = {}
     if output.suffix.lower() == ".ply":
-        options = {"save_vertex_quality": True, **{f"__ca_vs__{name.lower()}": True for name in attributes}}
+        options = {"save_vertex_quality": True,
+                   **{key: True for key in ms.filter_parameter_values("ply") if key.startswith("__ca_vs__")}}
     try:
         ms.save_current_mesh(str(temporary), **options)
         os.replace(temporary, output)
@@ -116,36 +130,100 @@ def _terminal_progress(percent: float, message: str) -> None:
           file=sys.stderr, flush=True)
 
 
+def _progress_display():
+    return _terminal_progress if sys.stderr.isatty() else None
+
+
+def _write_landmarks(ms, args, names: dict) -> dict:
+    """Snap the landmark file onto the current mesh and store it as the attributes ``names``."""
+    from .attributes import write_landmark_attributes
+
+    snapped, frame_note = _snapped_pairs(ms, args)
+    missing = [name.strip() for name in args.missing.split(",") if name.strip()]
+    left_weights, right_weights = snapped.weights(missing) if missing else (None, None)
+    write_landmark_attributes(ms.current_mesh(), snapped.pairs, left_weights, right_weights, names["pair_attribute"],
+                              names["midline_attribute"], names["weight_attribute"])
+    return {"file": str(args.landmarks), "frame": frame_note, "pairs": [list(p) for p in snapped.pair_names],
+            "midline": snapped.midline_names, "missing": missing,
+            "snap_distance_max": float(snapped.snap_distances.max()), "left_out_unplaced": snapped.unplaced}
+
+
+def _write_report(path, report) -> None:
+    if path:
+        path.write_text(json.dumps(report, indent=2, default=_jsonable) + "\n")
+
+
+def _jsonable(value):
+    import numpy as np
+
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"{type(value).__name__} is not JSON serializable")
+
+
 def _symmetrize(args) -> int:
-    from .attributes import optional_attribute, write_landmark_attributes
-    from .hausdorff import two_way_hausdorff
-    from .meshset_filter import ASYMMETRY_ATTRIBUTE, generate_symmetrized_mesh
+    from .meshset_filter import generate_symmetrized_mesh
 
     params = {p.name: getattr(args, p.name) for p in PARAMETERS}
     if not args.output.parent.is_dir():
         raise SymblendError(f"{args.output}: the folder {args.output.parent} does not exist; create it first.")
     ms = _load_mesh(args.input)
-    snapped, frame_note = _snapped_pairs(ms, args)
-    missing = [name.strip() for name in args.missing.split(",") if name.strip()]
-    left_weights, right_weights = snapped.weights(missing) if missing else (None, None)
-    write_landmark_attributes(ms.current_mesh(), snapped.pairs, left_weights, right_weights,
-                              params["pair_attribute"], params["midline_attribute"], params["weight_attribute"])
-    report = generate_symmetrized_mesh(ms, _terminal_progress if sys.stderr.isatty() else None, **params)
-    report["hausdorff_input_output"] = two_way_hausdorff(ms, report["input_mesh_id"], report["output_mesh_id"])
-    report["landmarks"] = {"file": str(args.landmarks), "frame": frame_note,
-                           "pairs": [list(p) for p in snapped.pair_names],
-                           "midline": snapped.midline_names, "missing": missing,
-                           "snap_distance_max": float(snapped.snap_distances.max()),
-                           "left_out_unplaced": snapped.unplaced}
-    _save_atomically(ms, args.output, [ASYMMETRY_ATTRIBUTE] + [
-        params[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")
-        if optional_attribute(ms.current_mesh(), params[name]) is not None])
-    if args.report:
-        args.report.write_text(json.dumps(report, indent=2) + "\n")
+    landmarks = _write_landmarks(ms, args, params)
+    report = generate_symmetrized_mesh(ms, _progress_display(), **params)
+    report["landmarks"] = landmarks
+    _save_atomically(ms, args.output)
+    _write_report(args.report, report)
     before, after = report["landmark_asymmetry_before"], report["landmark_asymmetry_after"]
     print(f"{args.output}: {report['pair_count']} pairs, mode {report['mode']}; landmark asymmetry RMS "
-          f"{before['rms_relative']:.2%} -> {after['rms_relative']:.1e} of the diagonal; two-way Hausdorff "
-          f"input<->output {report['hausdorff_input_output']['max']:.4g}")
+          f"{before['rms_relative']:.2%} -> {after['rms_relative']:.1e} of the diagonal; mirror asymmetry RMS "
+          f"{report['mirror_asymmetry_before']['rms_relative']:.2%} -> "
+          f"{report['mirror_asymmetry_after']['rms_relative']:.2%}; two-way Hausdorff input<->output "
+          f"{report['hausdorff_input_output']['max']:.4g}")
+    return 0
+
+
+def _mlx(args) -> int:
+    from .mlx import read_filter_script, symblend_options
+    from .script_runner import apply_filter_script
+
+    if not args.output.parent.is_dir():
+        raise SymblendError(f"{args.output}: the folder {args.output.parent} does not exist; create it first.")
+    ours = [symblend_options(node, args.script) for node in read_filter_script(args.script) if node.is_symblend]
+    ms = _load_mesh(args.input)
+    landmarks = None
+    if args.landmarks:
+        landmarks = _write_landmarks(ms, args, ours[0] if ours else DEFAULTS)
+    steps = apply_filter_script(ms, args.script, _progress_display())
+    _save_atomically(ms, args.output)
+    _write_report(args.report, {"script": str(args.script), "landmarks": landmarks, "steps": steps})
+    print(f"{args.output}: {len(steps)} filters of {args.script} applied")
+    return 0
+
+
+def _report(args) -> int:
+    from .comparison import compare_layers
+
+    ms = _load_mesh(args.before)
+    before_id = ms.current_mesh_id()
+    after_id = _load_mesh(args.after, ms).current_mesh_id()
+    result = compare_layers(ms, before_id, after_id, args.pair_attribute)
+    hausdorff = result["hausdorff_before_after"]
+    print(f"{'':24}{'max':>12}{'mean':>12}{'RMS':>12}")
+    print(f"{'Hausdorff before<->after':24}{hausdorff['max']:12.5g}{hausdorff['mean']:12.5g}{hausdorff['rms']:12.5g}")
+    for key, label in (("mirror_asymmetry_before", "mirror asymmetry before"),
+                       ("mirror_asymmetry_after", "mirror asymmetry after")):
+        m = result[key]
+        print(f"{label:24}{m['max']:12.5g}{m['mean']:12.5g}{m['rms']:12.5g}")
+    if args.png:
+        from .render import render_comparison
+
+        meshes = [dict(result[key], points=ms.mesh(mesh_id).vertex_matrix(), faces=ms.mesh(mesh_id).face_matrix())
+                  for key, mesh_id in (("mirror_asymmetry_before", before_id), ("mirror_asymmetry_after", after_id))]
+        render_comparison(args.png, *meshes, titles=(args.before.name, args.after.name))
+        print(f"picture: {args.png}")
+    _write_report(args.json, result)
     return 0
 
 
@@ -184,12 +262,31 @@ def build_parser() -> argparse.ArgumentParser:
     _add_landmark_options(run)
     run.add_argument("-o", "--output", required=True, type=pathlib.Path,
                      help="output mesh; .ply keeps quality (local asymmetry) and the attributes")
-    run.add_argument("--report", type=pathlib.Path, help="write the filter's report, plus Hausdorff, as JSON")
-    run.add_argument("--missing", default="", metavar="NAME,NAME",
-                     help="landmarks on missing or broken parts (weight 0): that side takes the "
-                          "mirror shape of the other (the paper's Figure 9)")
+    run.add_argument("--report", type=pathlib.Path, help="write the filter's report as JSON")
+    _add_missing_option(run)
     _add_filter_options(run)
     run.set_defaults(handler=_symmetrize)
+
+    script = commands.add_parser("mlx", help="run a MeshLab filter script (.mlx) that may use our filter")
+    script.add_argument("script", type=pathlib.Path, help="filter script (.mlx), e.g. one of mlx_presets/")
+    script.add_argument("input", type=pathlib.Path, help="mesh file (any format pymeshlab reads)")
+    _add_landmark_options(script, required=False)
+    _add_missing_option(script)
+    script.add_argument("-o", "--output", required=True, type=pathlib.Path,
+                        help="the current mesh after the script; .ply keeps quality and the attributes")
+    script.add_argument("--report", type=pathlib.Path, help="write every filter's output as JSON")
+    script.set_defaults(handler=_mlx)
+
+    report = commands.add_parser("report", help="before/after check: Hausdorff and mirror asymmetry")
+    report.add_argument("before", type=pathlib.Path, help="mesh before symmetrizing")
+    report.add_argument("after", type=pathlib.Path, help="mesh after symmetrizing")
+    report.add_argument("--png", type=pathlib.Path,
+                        help="picture of both meshes coloured by mirror asymmetry (needs matplotlib)")
+    report.add_argument("--json", type=pathlib.Path, help="write the numbers as JSON")
+    report.add_argument("--pair-attribute", default=DEFAULTS["pair_attribute"],
+                        help="landmark pairs (PLY property) that start the mirror-plane fit, when present; "
+                             "default: %(default)s")
+    report.set_defaults(handler=_report)
 
     landmarks = commands.add_parser("landmarks", help="check or convert landmark files")
     sub = landmarks.add_subparsers(dest="landmarks_command", required=True)

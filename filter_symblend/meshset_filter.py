@@ -11,13 +11,21 @@ deleted and the input is current again.
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
 import inspect
 
+import numpy as np
 import pymeshlab
 
+from . import recording
+from .asymmetry import fit_mirror_plane
 from .attributes import optional_attribute, read_landmark_attributes
 from .errors import MeshSetError, ParameterError
-from .parameters import keyword_signature, parameters_doc, validate_parameters
+from .hausdorff import two_way_hausdorff
+from .mirror_fill import fill_from_mirror
+from .parameters import PARAMETERS, keyword_signature, parameters_doc, validate_parameters
+from .surface_symmetry import mirror_asymmetry
 from .symmetrize import symmetrize
 
 FILTER_NAME = "generate_symmetrized_mesh"
@@ -62,7 +70,82 @@ def _add_output_layer(ms: pymeshlab.MeshSet, input_id: int, result, carried: dic
         raise
 
 
-def generate_symmetrized_mesh(ms: pymeshlab.MeshSet, progress=None, **params) -> dict:
+def _missing_region(mesh: pymeshlab.Mesh, region: str, weight_attribute: str):
+    """(missing (N,) in [0, 1], faces excluded from the intact surface (F,) bool) for
+    ``missing_region``, or None for 'none'."""
+    if region == "none":
+        return None
+    if mesh.is_point_cloud():
+        raise MeshSetError(f"`missing_region='{region}'` needs faces to mirror, and the current mesh "
+                           f"('{mesh.label()}') is a point cloud; use missing_region='none'.")
+    faces = mesh.face_matrix()
+    if region == "weight":
+        weights = optional_attribute(mesh, weight_attribute)
+        if weights is None:
+            raise MeshSetError(
+                f"`missing_region='weight'` reads the per-vertex attribute `{weight_attribute}`, and the "
+                f"current mesh ('{mesh.label()}') has none. Add it (1 intact, 0 missing), or use "
+                "missing_region='selection'.")
+        return 1.0 - np.clip(weights, 0.0, 1.0), np.zeros(len(faces), dtype=bool)
+    selected_faces = mesh.face_selection_array()
+    missing = mesh.vertex_selection_array().astype(float)
+    unselected_face_at = np.zeros(mesh.vertex_number(), dtype=bool)
+    unselected_face_at[faces[~selected_faces].ravel()] = True
+    used = np.zeros(mesh.vertex_number(), dtype=bool)
+    used[faces.ravel()] = True
+    missing[used & ~unselected_face_at] = 1.0
+    if not missing.any():
+        raise MeshSetError(
+            f"`missing_region='selection'`, but no vertex of the current mesh ('{mesh.label()}') is "
+            "selected, nor surrounded by selected faces. Select the missing region first (e.g. "
+            "ms.meshing_close_holes(newfaceselected=True, refinehole=True) selects the new faces).")
+    return missing, selected_faces
+
+
+def _fingerprint(mesh: pymeshlab.Mesh, options: dict) -> str:
+    """A digest of everything the filter reads from ``mesh``: equal digests, equal results."""
+    digest = hashlib.sha1(repr(sorted(options.items())).encode())
+    for array in (mesh.vertex_matrix(), mesh.face_matrix(), mesh.vertex_selection_array(),
+                  mesh.face_selection_array()):
+        digest.update(np.ascontiguousarray(array).tobytes())
+    for name in (options["pair_attribute"], options["midline_attribute"], options["weight_attribute"]):
+        values = optional_attribute(mesh, name)
+        digest.update(b"-" if values is None else values.tobytes())
+    return digest.hexdigest()
+
+
+def _compute(mesh: pymeshlab.Mesh, options: dict, progress) -> tuple:
+    """(result, input mirror asymmetry) for the current mesh: the whole computation, no layer added."""
+    names = {name: options[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
+    pairs, left_weights, right_weights = read_landmark_attributes(mesh, **names)
+    region = _missing_region(mesh, options["missing_region"], options["weight_attribute"])
+    core = {p.name: options[p.name] for p in PARAMETERS if not p.adapter_only}
+    points, faces = mesh.vertex_matrix(), mesh.face_matrix()
+    # The fill works in the input frame, where the asymmetry (distance moved) is measured.
+    result = symmetrize(points, pairs.left, pairs.right, pairs.ids, pairs.midline,
+                        left_weights, right_weights, progress, **{**core, "output_frame": "input"})
+    report = result.report
+    if region is not None:
+        missing, excluded = region
+        filled = fill_from_mirror(result.points, faces, missing, report["plane_normal"],
+                                  report["plane_offset"], excluded)
+        result = dataclasses.replace(result, points=filled, asymmetry=np.linalg.norm(filled - points, axis=1))
+        report["filled_vertices"] = int(np.count_nonzero(missing))
+    if options["output_frame"] == "canonical":
+        transform = np.array(report["canonical_from_input"])
+        result = dataclasses.replace(result, points=result.points @ transform[:3, :3].T + transform[:3, 3])
+        report.update(output_frame="canonical", plane_normal=[1.0, 0.0, 0.0], plane_offset=0.0)
+    before = mirror_asymmetry(points, faces, fit_mirror_plane(points[pairs.left], points[pairs.right]))
+    after = mirror_asymmetry(result.points, faces,
+                             fit_mirror_plane(result.points[pairs.left], result.points[pairs.right]))
+    report["mirror_asymmetry_before"] = {k: v for k, v in before.items() if k != "per_vertex"}
+    report["mirror_asymmetry_after"] = {k: v for k, v in after.items() if k != "per_vertex"}
+    return result
+
+
+def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict | None = None) -> dict:
+    """``generate_symmetrized_mesh`` with an optional result ``cache`` (fingerprint -> result), so a
+    script rehearsed on a copy of the MeshSet does not compute the same warp twice."""
     options = validate_parameters(params)
     if ms.mesh_number() == 0:
         raise MeshSetError(
@@ -70,19 +153,27 @@ def generate_symmetrized_mesh(ms: pymeshlab.MeshSet, progress=None, **params) ->
         )
     input_id = ms.current_mesh_id()
     mesh = ms.current_mesh()
-    attributes = {name: options.pop(name) for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
-    names = list(attributes.values())
+    names = [options[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")]
     if len(set(names)) < len(names) or ASYMMETRY_ATTRIBUTE in names:
         raise ParameterError(
             f"`pair_attribute`, `midline_attribute` and `weight_attribute` must be three different "
             f"names, none of them `{ASYMMETRY_ATTRIBUTE}` (the filter writes it); got {', '.join(names)}.")
-    pairs, left_weights, right_weights = read_landmark_attributes(mesh, **attributes)
-    result = symmetrize(mesh.vertex_matrix(), pairs.left, pairs.right, pairs.ids, pairs.midline,
-                        left_weights, right_weights, progress, **options)
-    carried = {name: values for name in attributes.values()
-               if (values := optional_attribute(mesh, name)) is not None}
-    output_id = _add_output_layer(ms, input_id, result, carried)
-    return {**result.report, "input_mesh_id": input_id, "output_mesh_id": output_id}
+    key = _fingerprint(mesh, options) if cache is not None else None
+    result = cache.get(key) if cache is not None else None
+    if result is None:
+        result = _compute(mesh, options, progress)
+        if cache is not None:
+            cache[key] = result
+    carried = {name: values for name in names if (values := optional_attribute(mesh, name)) is not None}
+    with recording.recorded_call(ms, options):  # our native steps, saved as one node of ours
+        output_id = _add_output_layer(ms, input_id, result, carried)
+        hausdorff = two_way_hausdorff(ms, input_id, output_id)
+    return {**result.report, "hausdorff_input_output": hausdorff,
+            "input_mesh_id": input_id, "output_mesh_id": output_id}
+
+
+def generate_symmetrized_mesh(ms: pymeshlab.MeshSet, progress=None, **params) -> dict:
+    return run_filter(ms, params, progress)
 
 
 _PROGRESS = inspect.Parameter("progress", inspect.Parameter.KEYWORD_ONLY, default=None)

@@ -127,6 +127,15 @@ PARAMETERS: tuple[Parameter, ...] = (
         adapter_only=True,
     ),
     Parameter(
+        "missing_region", "enum", "none", "Missing region",
+        "Vertices that take the mirror shape of the intact side after symmetrizing (each moves to "
+        "its closest point on the reflected intact surface, faded in at the border). 'none': no "
+        "fill. 'weight': vertices whose weight attribute is below 1 (by 1 - weight). 'selection': "
+        "the selected vertices, and the vertices whose faces are all selected (e.g. the faces "
+        "`meshing_close_holes(newfaceselected=True, refinehole=True)` just added).",
+        choices=("none", "weight", "selection"), adapter_only=True,
+    ),
+    Parameter(
         "output_frame", "enum", "input", "Output frame",
         "'input': the result rigidly fitted back onto the input landmarks, for "
         "before/after comparison. 'canonical': symmetry plane x = 0, left (+k) "

@@ -190,6 +190,9 @@ def symmetrize(points, left, right, pair_ids=None, midline=None, left_weights=No
         "output_frame": options["output_frame"],
         "plane_normal": normal.tolist(),
         "plane_offset": offset,
+        # 4x4 rigid map from the input frame to the canonical one (plane x = 0).
+        "canonical_from_input": np.block([[rotation.T, (-rotation.T @ translation)[:, None]],
+                                          [np.zeros((1, 3)), np.ones((1, 1))]]).tolist(),
         "landmark_asymmetry_before": fit_mirror_plane(points[left], points[right]).summary(diagonal),
         "landmark_asymmetry_after": fit_mirror_plane(warped[left], warped[right]).summary(diagonal),
         "vertex_displacement": _summary(asymmetry),

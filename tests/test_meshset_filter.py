@@ -58,7 +58,8 @@ def test_output_matches_the_array_core(bent_cow_meshset):
     ms, deformed, left, right = bent_cow_meshset
     ms.generate_symmetrized_mesh(mode="articulated", phi_width=4, output_frame="canonical")
     core = filter_symblend.symmetrize(deformed, left, right, mode="articulated", phi_width=4, output_frame="canonical")
-    np.testing.assert_array_equal(ms.current_mesh().vertex_matrix(), core.points)
+    # The adapter warps in the input frame, then maps rigidly to the canonical one: rounding only.
+    np.testing.assert_allclose(ms.current_mesh().vertex_matrix(), core.points, rtol=0, atol=1e-14)
 
 
 def test_normals_are_recomputed_for_the_warped_surface(bent_cow_meshset):
