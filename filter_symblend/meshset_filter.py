@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import inspect
+import warnings
 
 import numpy as np
 import pymeshlab
@@ -21,7 +22,7 @@ import pymeshlab
 from . import recording
 from .asymmetry import fit_mirror_plane
 from .attributes import optional_attribute, read_landmark_attributes
-from .errors import MeshSetError, ParameterError
+from .errors import MeshSetError, ParameterError, SymblendWarning
 from .hausdorff import two_way_hausdorff
 from .mirror_fill import fill_from_mirror
 from .parameters import PARAMETERS, keyword_signature, parameters_doc, validate_parameters
@@ -95,10 +96,11 @@ def _missing_region(mesh: pymeshlab.Mesh, region: str, weight_attribute: str):
     used[faces.ravel()] = True
     missing[used & ~unselected_face_at] = 1.0
     if not missing.any():
-        raise MeshSetError(
-            f"`missing_region='selection'`, but no vertex of the current mesh ('{mesh.label()}') is "
-            "selected, nor surrounded by selected faces. Select the missing region first (e.g. "
-            "ms.meshing_close_holes(newfaceselected=True, refinehole=True) selects the new faces).")
+        warnings.warn(f"`missing_region='selection'`, but no vertex of the current mesh ('{mesh.label()}') is "
+                      "selected, nor surrounded by selected faces: nothing is filled. (Hole filling selects "
+                      "its new faces with ms.meshing_close_holes(newfaceselected=True, refinehole=True).)",
+                      SymblendWarning, stacklevel=4)
+        return None
     return missing, selected_faces
 
 
