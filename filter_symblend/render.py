@@ -35,7 +35,7 @@ def _draw(axis, points, faces, values, frame, view_axis, norm, colormap):
     order = order[facing[order]] if facing.any() else order
     polygons = triangles[order][:, :, screen]
     colours = colormap(norm(values[faces[order]].mean(axis=1)))
-    axis.add_collection(PolyCollection(polygons, facecolors=colours, edgecolors="none"))
+    axis.add_collection(PolyCollection(polygons, facecolors=colours, edgecolors=colours, linewidths=0.3))
     axis.set_xlim(local[:, screen[0]].min(), local[:, screen[0]].max())
     axis.set_ylim(local[:, screen[1]].min(), local[:, screen[1]].max())
     axis.set_aspect("equal")
@@ -43,7 +43,8 @@ def _draw(axis, points, faces, values, frame, view_axis, norm, colormap):
 
 
 def render_comparison(path, before: dict, after: dict, titles=("before", "after")) -> None:
-    """Write a PNG: a row per mesh, a column per view, one shared colour bar (mesh units).
+    """Write a PNG: a row per mesh, a column per view, one shared colour bar (mesh units). The
+    views look along the axes of the ``after`` mesh's symmetry frame.
 
     ``before`` and ``after`` hold ``points`` (N, 3), ``faces`` (F, 3),
     ``per_vertex`` (N,) asymmetry and ``plane_normal`` (3,).
@@ -60,8 +61,8 @@ def render_comparison(path, before: dict, after: dict, titles=("before", "after"
     norm = matplotlib.colors.Normalize(0.0, top)
     colormap = matplotlib.colormaps["viridis"]
     figure, axes = plt.subplots(2, len(VIEWS), figsize=(4 * len(VIEWS), 7.5), constrained_layout=True)
+    frame = _plane_frame(after["points"], after["plane_normal"])  # one frame: the same views of both
     for row, (mesh, title) in enumerate(zip((before, after), titles)):
-        frame = _plane_frame(mesh["points"], mesh["plane_normal"])
         for column, (view, view_axis) in enumerate(VIEWS):
             _draw(axes[row, column], mesh["points"], mesh["faces"], mesh["per_vertex"], frame, view_axis,
                   norm, colormap)

@@ -1,6 +1,7 @@
 """The symblend command, through main([...]) and once as a real process."""
 
 import json
+import pathlib
 import subprocess
 import sys
 
@@ -201,3 +202,70 @@ def test_an_output_format_pymeshlab_cannot_write(tmp_path, bent_cow_files, capsy
     err = capsys.readouterr().err
     assert "out.xyzzy: pymeshlab cannot write it (Unknown format for save: xyzzy)" in err and err.count("\n") == 1
     assert not list(tmp_path.glob("*xyzzy*")) and not list(tmp_path.glob(".*partial*"))
+
+
+def test_mlx_runs_a_preset_with_a_landmark_file(tmp_path, bent_cow_files, capsys):
+    mesh_path, landmark_path, *_ = bent_cow_files
+    preset = pathlib.Path(__file__).resolve().parents[1] / "mlx_presets" / "scan_cleanup.mlx"
+    output, report = tmp_path / "clean.ply", tmp_path / "steps.json"
+    assert main(["mlx", str(preset), str(mesh_path), "-l", str(landmark_path), "-o", str(output),
+                 "--report", str(report)]) == 0
+    assert "2 filters of" in capsys.readouterr().out
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(output))
+    assert ms.current_mesh().face_number() == 5804 // 2
+    steps = json.loads(report.read_text())["steps"]
+    assert steps[0]["output"]["pair_count"] == 80
+
+
+def test_mlx_error_writes_nothing(tmp_path, bent_cow_files, capsys):
+    mesh_path, *_ = bent_cow_files
+    bad = tmp_path / "bad.mlx"
+    bad.write_text('<FilterScript><filter name="Close Hole"/></FilterScript>')
+    output = tmp_path / "out.ply"
+    assert main(["mlx", str(bad), str(mesh_path), "-o", str(output)]) == 1
+    assert "no MeshLab filter has this name" in capsys.readouterr().err
+    assert not output.exists() and list(tmp_path.glob(".*partial*")) == []
+
+
+def test_report_numbers_match_an_independent_computation(tmp_path, bent_cow_files, capsys):
+    mesh_path, landmark_path, *_ = bent_cow_files
+    output, numbers, picture = tmp_path / "out.ply", tmp_path / "numbers.json", tmp_path / "check.png"
+    assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "-o", str(output)]) == 0
+    assert main(["report", str(mesh_path), str(output), "--json", str(numbers), "--png", str(picture)]) == 0
+    printed = capsys.readouterr().out
+    assert "mirror asymmetry after" in printed and f"picture: {picture}" in printed
+    data = json.loads(numbers.read_text())
+    assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # Independent: MeshLab's Hausdorff from each mesh to its reflection across the reported plane.
+    for key, path in (("mirror_asymmetry_before", mesh_path), ("mirror_asymmetry_after", output)):
+        ms = pymeshlab.MeshSet()
+        ms.load_new_mesh(str(path))
+        points, faces = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+        normal, offset = np.array(data[key]["plane_normal"]), data[key]["plane_offset"]
+        mirrored = points - 2 * (points @ normal - offset)[:, None] * normal
+        ms.add_mesh(pymeshlab.Mesh(mirrored, faces[:, ::-1]))
+        measured = ms.get_hausdorff_distance(sampledmesh=0, targetmesh=1, samplevert=True, sampleface=False,
+                                             maxdist=pymeshlab.PureValue(10.0))
+        assert data[key]["max"] == pytest.approx(measured["max"], rel=1e-4, abs=1e-7)
+        assert data[key]["mean"] == pytest.approx(measured["mean"], rel=2e-3)  # MeshLab works in float32
+        assert data[key]["rms"] == pytest.approx(measured["RMS"], rel=2e-3)
+    assert data["mirror_asymmetry_after"]["rms"] < data["mirror_asymmetry_before"]["rms"] / 5
+    assert data["hausdorff_before_after"]["max"] > 0
+
+
+def test_report_png_without_matplotlib_says_how_to_install_it(tmp_path, bent_cow_files, capsys, monkeypatch):
+    import builtins
+
+    mesh_path, *_ = bent_cow_files
+    real_import = builtins.__import__
+
+    def no_matplotlib(name, *args, **kwargs):
+        if name.startswith("matplotlib"):
+            raise ImportError(name)
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_matplotlib)
+    assert main(["report", str(mesh_path), str(mesh_path), "--png", str(tmp_path / "x.png")]) == 1
+    assert "pip install 'filter-symblend[plot]'" in capsys.readouterr().err
+    assert not (tmp_path / "x.png").exists()
