@@ -26,6 +26,18 @@ def optional_attribute(mesh: pymeshlab.Mesh, name: str) -> np.ndarray | None:
         return None
 
 
+def custom_attribute_names(ms: pymeshlab.MeshSet) -> dict[str, list[str]]:
+    """Custom attributes of the current mesh by kind: 'vs', 'vp', 'fs', 'fp' (vertex/face, scalar/point).
+
+    pymeshlab cannot list them directly; its PLY exporter's parameters name them.
+    """
+    names = {"vs": [], "vp": [], "fs": [], "fp": []}
+    for key in ms.filter_parameter_values("ply"):
+        if key.startswith("__ca_") and key[5:7] in names and key[7:9] == "__":
+            names[key[5:7]].append(key[9:])
+    return names
+
+
 def pair_labels(n_vertices: int, pairs: LandmarkPairs) -> np.ndarray:
     """The pair attribute (N,): +k on left vertices, -k on right ones, 0 elsewhere."""
     labels = np.zeros(n_vertices)

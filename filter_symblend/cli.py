@@ -102,18 +102,24 @@ def _snapped_pairs(ms, args):
     return snapped, frame_note
 
 
+def _require_folder(output: pathlib.Path) -> None:
+    """Fail before any work when the output's folder is missing."""
+    if not output.parent.is_dir():
+        raise SymblendError(f"{output}: the folder {output.parent} does not exist; create it first.")
+
+
 def _save_atomically(ms, output: pathlib.Path) -> None:
     """Save the current mesh to a temporary name beside ``output``, then rename it. A PLY keeps
     quality and every custom per-vertex scalar attribute."""
     import pymeshlab
 
-    if not output.parent.is_dir():
-        raise SymblendError(f"{output}: the folder {output.parent} does not exist; create it first.")
+    from .attributes import custom_attribute_names
+
     temporary = output.with_name(f".{output.stem}.symblend-partial{output.suffix}")
     options = {}
     if output.suffix.lower() == ".ply":
         options = {"save_vertex_quality": True,
-                   **{key: True for key in ms.filter_parameter_values("ply") if key.startswith("__ca_vs__")}}
+                   **{f"__ca_vs__{name}": True for name in custom_attribute_names(ms)["vs"]}}
     try:
         ms.save_current_mesh(str(temporary), **options)
         os.replace(temporary, output)
@@ -167,8 +173,7 @@ def _symmetrize(args) -> int:
     from .meshset_filter import generate_symmetrized_mesh
 
     params = {p.name: getattr(args, p.name) for p in PARAMETERS}
-    if not args.output.parent.is_dir():
-        raise SymblendError(f"{args.output}: the folder {args.output.parent} does not exist; create it first.")
+    _require_folder(args.output)
     ms = _load_mesh(args.input)
     landmarks = _write_landmarks(ms, args, params)
     report = generate_symmetrized_mesh(ms, _progress_display(), **params)
@@ -188,8 +193,7 @@ def _mlx(args) -> int:
     from .mlx import read_filter_script, symblend_options
     from .script_runner import apply_filter_script
 
-    if not args.output.parent.is_dir():
-        raise SymblendError(f"{args.output}: the folder {args.output.parent} does not exist; create it first.")
+    _require_folder(args.output)
     ours = [symblend_options(node, args.script) for node in read_filter_script(args.script) if node.is_symblend]
     ms = _load_mesh(args.input)
     landmarks = None

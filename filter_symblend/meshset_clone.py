@@ -15,20 +15,10 @@ from __future__ import annotations
 import numpy as np
 import pymeshlab
 
+from .attributes import custom_attribute_names
+
 _VERTEX_SELECTED = "symblend_clone_vertex_selected"
 _FACE_SELECTED = "symblend_clone_face_selected"
-
-
-def custom_attribute_names(ms: pymeshlab.MeshSet) -> dict[str, list[str]]:
-    """Custom attributes of the current mesh by kind: 'vs', 'vp', 'fs', 'fp' (vertex/face, scalar/point).
-
-    pymeshlab cannot list them directly; its PLY exporter's parameters name them.
-    """
-    names = {"vs": [], "vp": [], "fs": [], "fp": []}
-    for key in ms.filter_parameter_values("ply"):
-        if key.startswith("__ca_") and key[5:7] in names and key[7:9] == "__":
-            names[key[5:7]].append(key[9:])
-    return names
 
 
 def _copy_of(mesh: pymeshlab.Mesh) -> pymeshlab.Mesh:

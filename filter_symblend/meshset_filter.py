@@ -27,7 +27,7 @@ from .hausdorff import two_way_hausdorff
 from .mirror_fill import fill_from_mirror
 from .parameters import PARAMETERS, keyword_signature, parameters_doc, validate_parameters
 from .surface_symmetry import mirror_asymmetry
-from .symmetrize import symmetrize
+from .symmetrize import SymmetrizationResult, symmetrize
 
 FILTER_NAME = "generate_symmetrized_mesh"
 DISPLAY_NAME = "Symmetrize: Closed-form Blending of Local Symmetries"
@@ -116,8 +116,8 @@ def _fingerprint(mesh: pymeshlab.Mesh, options: dict) -> str:
     return digest.hexdigest()
 
 
-def _compute(mesh: pymeshlab.Mesh, options: dict, progress) -> tuple:
-    """(result, input mirror asymmetry) for the current mesh: the whole computation, no layer added."""
+def _compute(mesh: pymeshlab.Mesh, options: dict, progress) -> SymmetrizationResult:
+    """The whole computation for ``mesh`` (warp, fill, mirror asymmetry before and after); no layer added."""
     names = {name: options[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
     pairs, left_weights, right_weights = read_landmark_attributes(mesh, **names)
     region = _missing_region(mesh, options["missing_region"], options["weight_attribute"])
@@ -160,12 +160,13 @@ def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict |
         raise ParameterError(
             f"`pair_attribute`, `midline_attribute` and `weight_attribute` must be three different "
             f"names, none of them `{ASYMMETRY_ATTRIBUTE}` (the filter writes it); got {', '.join(names)}.")
-    key = _fingerprint(mesh, options) if cache is not None else None
-    result = cache.get(key) if cache is not None else None
-    if result is None:
+    if cache is None:
         result = _compute(mesh, options, progress)
-        if cache is not None:
-            cache[key] = result
+    else:
+        key = _fingerprint(mesh, options)
+        if key not in cache:
+            cache[key] = _compute(mesh, options, progress)
+        result = cache[key]
     carried = {name: values for name in names if (values := optional_attribute(mesh, name)) is not None}
     with recording.recorded_call(ms, options):  # our native steps, saved as one node of ours
         output_id = _add_output_layer(ms, input_id, result, carried)

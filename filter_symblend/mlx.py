@@ -59,13 +59,16 @@ def read_filter_script(path) -> list[FilterNode]:
     for position, element in enumerate(root, start=1):
         if element.tag != "filter" or "name" not in element.attrib:
             raise ScriptError(f"{path}, element {position}: expected <filter name=\"...\">, got <{element.tag}>.")
-        params = [dict(p.attrib) for p in element if p.tag == "Param"]
-        for param in params:
-            if "name" not in param or "type" not in param:
-                raise ScriptError(f"{path}, filter {position} ('{element.attrib['name']}'): every <Param> "
-                                  "needs a name and a type.")
-        nodes.append(FilterNode(element.attrib["name"], params, position))
+        node = node_from_element(element, position)
+        if any("name" not in param or "type" not in param for param in node.params):
+            raise ScriptError(f"{node.where(path)}: every <Param> needs a name and a type.")
+        nodes.append(node)
     return nodes
+
+
+def node_from_element(element: ElementTree.Element, position: int) -> FilterNode:
+    """A ``<filter>`` element as a node, its ``<Param>`` attributes kept exactly as written."""
+    return FilterNode(element.attrib["name"], [dict(p.attrib) for p in element if p.tag == "Param"], position)
 
 
 def write_filter_script(nodes: list[FilterNode], path) -> None:
@@ -266,9 +269,4 @@ def native_call(node: FilterNode, path) -> NativeCall:
         if kind == "RichMesh":
             mesh_ids[param["name"]] = values[name]
     return NativeCall(node, filter_name, values, mesh_ids)
-
-
-def native_node_from_recording(element: ElementTree.Element, position: int) -> FilterNode:
-    """A node of a script pymeshlab recorded, kept exactly as written."""
-    return FilterNode(element.attrib["name"], [dict(p.attrib) for p in element if p.tag == "Param"], position)
 

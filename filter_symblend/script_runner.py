@@ -15,7 +15,7 @@ import pymeshlab
 from .errors import MeshSetError, SymblendError
 from .meshset_clone import clone_meshset
 from .meshset_filter import DISPLAY_NAME, run_filter
-from .mlx import (FilterNode, NativeCall, ScriptError, native_call, native_node_from_recording,
+from .mlx import (FilterNode, NativeCall, ScriptError, native_call, node_from_element,
                   read_filter_script, symblend_node, symblend_options, write_filter_script)
 from .recording import recorded_calls, recorded_native_script
 
@@ -86,8 +86,8 @@ def save_filter_script(ms: pymeshlab.MeshSet, path) -> None:
                 "The MeshSet's recorded filter script no longer matches the calls of our filter (it was "
                 "cleared or replaced, e.g. by ms.clear_filter_script() or ms.load_filter_script()); "
                 "build the pipeline again on a fresh MeshSet to record it.")
-        nodes += [native_node_from_recording(e, len(nodes) + i + 1) for i, e in enumerate(native[index:start])]
+        nodes += [node_from_element(e, len(nodes) + i + 1) for i, e in enumerate(native[index:start])]
         nodes.append(symblend_node(options, len(nodes) + 1))
         index = end
-    nodes += [native_node_from_recording(e, len(nodes) + i + 1) for i, e in enumerate(native[index:])]
+    nodes += [node_from_element(e, len(nodes) + i + 1) for i, e in enumerate(native[index:])]
     write_filter_script(nodes, path)

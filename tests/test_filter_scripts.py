@@ -227,3 +227,18 @@ def test_scan_cleanup_preset_simplifies_the_whole_mesh_despite_a_leftover_select
     steps = apply_filter_script(ms, PRESETS / "scan_cleanup.mlx")
     assert steps[0]["output"]["mode"] == "standard"
     assert ms.current_mesh().face_number() == len(cow.faces) // 2
+
+
+def test_a_param_without_name_or_type_is_refused(tmp_path, holed_cow):
+    path = script(tmp_path, '<filter name="Close Holes"><Param value="3"/></filter>')
+    with pytest.raises(ScriptError, match=r"filter 1 \('Close Holes'\): every <Param> needs a name and a type"):
+        apply_filter_script(holed_cow, path)
+
+
+def test_a_meshlab_failure_names_the_step_and_changes_nothing(tmp_path, holed_cow):
+    needs_wedge_uv = '<filter name="Convert PerWedge UV into PerVertex UV"/>'  # the cow has no UVs
+    before = state(holed_cow)
+    with pytest.raises(ScriptError, match=r"filter 2 \('Convert PerWedge UV into PerVertex UV'\): MeshLab failed: "
+                                          r".*does not have Per"):
+        apply_filter_script(holed_cow, script(tmp_path, NATIVE[0], needs_wedge_uv))
+    assert_same_state(before, state(holed_cow))

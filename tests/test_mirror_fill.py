@@ -4,9 +4,9 @@ import numpy as np
 import pymeshlab
 import pytest
 
-import filter_symblend  # noqa: F401  (binds the filter)
+import filter_symblend
 from filter_symblend import MeshSetError, SymblendWarning
-from filter_symblend.mirror_fill import closest_points_on_surface, closest_points_on_triangles
+from filter_symblend.mirror_fill import closest_points_on_surface, closest_points_on_triangles, fill_from_mirror
 from conftest import meshset_with_pairs
 
 
@@ -94,3 +94,9 @@ def test_missing_region_errors_and_warning(cow):
     cloud = meshset_with_pairs(cow.points, None, *cow.landmarks(40))
     with pytest.raises(MeshSetError, match="is a point cloud; use missing_region='none'"):
         cloud.generate_symmetrized_mesh(missing_region="selection")
+
+
+def test_a_fill_with_no_intact_face_left_is_an_error(cow):
+    everything = np.ones(len(cow.points))
+    with pytest.raises(filter_symblend.GeometryError, match="No intact face is left to mirror"):
+        fill_from_mirror(cow.points, cow.faces, everything, [1.0, 0.0, 0.0], cow.offset)
