@@ -1,10 +1,11 @@
 """The ``symblend`` command: symmetrize a mesh from a landmark file, run filter scripts, compare
 before and after, check and convert landmarks.
 
-    symblend symmetrize INPUT -l LANDMARKS -o OUTPUT [--pairs PAIRS.csv] [--report REPORT.json] [filter options]
+    symblend symmetrize INPUT -l LANDMARKS -o OUTPUT [--pair-table PAIRS.csv] [--report REPORT.json] [filter options]
+    symblend symmetrize INPUT --pairs auto -o OUTPUT [--report REPORT.json] [filter options]
     symblend mlx SCRIPT.mlx INPUT [-l LANDMARKS] -o OUTPUT [--report REPORT.json]
     symblend report BEFORE AFTER [--png PICTURE.png] [--json NUMBERS.json]
-    symblend landmarks check INPUT -l LANDMARKS [--pairs PAIRS.csv]
+    symblend landmarks check INPUT -l LANDMARKS [--pair-table PAIRS.csv]
     symblend landmarks convert IN OUT
 
 The filter options are generated from the filter's parameter declaration.
@@ -30,19 +31,21 @@ def _add_filter_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("filter options (MeshSet.generate_symmetrized_mesh)")
     for p in PARAMETERS:
         unit = f" Unit: {p.unit}." if p.unit else ""
+        text = f"{p.label}. {p.doc}{unit} Valid: {p.range_text()}.".replace("%", "%%")  # argparse formats help
         options = {"dest": p.name, "default": p.default, "metavar": p.name.upper(),
-                   "help": f"{p.label}. {p.doc}{unit} Valid: {p.range_text()}. Default: %(default)s."}
+                   "help": text + " Default: %(default)s."}
         if p.kind == "enum":
             options["choices"] = p.choices
-        elif p.kind == "float":
-            options["type"] = float
+        elif p.kind in ("int", "float"):
+            options["type"] = int if p.kind == "int" else float
         group.add_argument("--" + p.name.replace("_", "-"), **options)
 
 
 def _add_landmark_options(parser: argparse.ArgumentParser, required: bool = True) -> None:
     parser.add_argument("-l", "--landmarks", required=required, type=pathlib.Path,
-                        help="landmark file: .pp, .fcsv, .mrk.json, .pts or .csv")
-    parser.add_argument("--pairs", type=pathlib.Path,
+                        help="landmark file: .pp, .fcsv, .mrk.json, .pts or .csv"
+                             + ("" if required else " (not with --pairs auto)"))
+    parser.add_argument("--pair-table", type=pathlib.Path,
                         help="pair table: two-column CSV of landmark names or 1-based numbers (left, right); "
                              "default: pair by name (L_/R_ prefixes, _left/_right suffixes, any case)")
     parser.add_argument("--side-words", default="l,left,lt/r,right,rt", metavar="LEFT,.../RIGHT,...",
@@ -88,8 +91,8 @@ def _snapped_pairs(ms, args):
 
     landmarks, frame_note = read_landmarks(args.landmarks).in_frame(args.mesh_frame)
     names = landmarks.names()
-    if args.pairs:
-        index_pairs = read_pair_table(args.pairs, names)
+    if args.pair_table:
+        index_pairs = read_pair_table(args.pair_table, names)
         paired = {i for pair in index_pairs for i in pair}
         unpaired = [i for i in range(len(names)) if i not in paired]
     else:
@@ -173,16 +176,29 @@ def _symmetrize(args) -> int:
     from .meshset_filter import generate_symmetrized_mesh
 
     params = {p.name: getattr(args, p.name) for p in PARAMETERS}
+    automatic = params["pairs"] == "auto"
+    if automatic == bool(args.landmarks):
+        raise SymblendError("Give a landmark file (-l LANDMARKS), or --pairs auto to find pairs on the "
+                            "surface" if not automatic else
+                            "--pairs auto finds its own pairs; leave out -l, or use --pairs landmarks+auto.")
     _require_folder(args.output)
     ms = _load_mesh(args.input)
-    landmarks = _write_landmarks(ms, args, params)
+    landmarks = None if automatic else _write_landmarks(ms, args, params)
     report = generate_symmetrized_mesh(ms, _progress_display(), **params)
     report["landmarks"] = landmarks
     _save_atomically(ms, args.output)
     _write_report(args.report, report)
-    before, after = report["landmark_asymmetry_before"], report["landmark_asymmetry_after"]
-    print(f"{args.output}: {report['pair_count']} pairs, mode {report['mode']}; landmark asymmetry RMS "
-          f"{before['rms_relative']:.2%} -> {after['rms_relative']:.1e} of the diagonal; mirror asymmetry RMS "
+    pairs = f"{report['pair_count']} landmark pairs"
+    if "auto_pairs" in report:
+        automatic_pairs = report["auto_pairs"]
+        pairs += (f" + {automatic_pairs['pair_count']} automatic pairs ({len(automatic_pairs['rounds'])} rounds, "
+                  f"{'converged' if automatic_pairs['converged'] else 'not converged'})")
+    landmark_line = ""
+    if "landmark_asymmetry_before" in report:
+        before, after = report["landmark_asymmetry_before"], report["landmark_asymmetry_after"]
+        landmark_line = (f"landmark asymmetry RMS {before['rms_relative']:.2%} -> {after['rms_relative']:.1e} "
+                         "of the diagonal; ")
+    print(f"{args.output}: {pairs}, mode {report['mode']}; {landmark_line}mirror asymmetry RMS "
           f"{report['mirror_asymmetry_before']['rms_relative']:.2%} -> "
           f"{report['mirror_asymmetry_after']['rms_relative']:.2%}; two-way Hausdorff input<->output "
           f"{report['hausdorff_input_output']['max']:.4g}")
@@ -261,9 +277,9 @@ def _convert(args) -> int:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="symblend", description=__doc__.split("\n\n")[0])
     commands = parser.add_subparsers(dest="command", required=True)
-    run = commands.add_parser("symmetrize", help="symmetrize a mesh from landmark pairs")
+    run = commands.add_parser("symmetrize", help="symmetrize a mesh from landmark pairs or automatic pairs")
     run.add_argument("input", type=pathlib.Path, help="mesh file (any format pymeshlab reads)")
-    _add_landmark_options(run)
+    _add_landmark_options(run, required=False)
     run.add_argument("-o", "--output", required=True, type=pathlib.Path,
                      help="output mesh; .ply keeps quality (local asymmetry) and the attributes")
     run.add_argument("--report", type=pathlib.Path, help="write the filter's report as JSON")

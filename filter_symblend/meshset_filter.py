@@ -118,14 +118,20 @@ def _fingerprint(mesh: pymeshlab.Mesh, options: dict) -> str:
 
 def _compute(mesh: pymeshlab.Mesh, options: dict, progress) -> SymmetrizationResult:
     """The whole computation for ``mesh`` (warp, fill, mirror asymmetry before and after); no layer added."""
-    names = {name: options[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
-    pairs, left_weights, right_weights = read_landmark_attributes(mesh, **names)
     region = _missing_region(mesh, options["missing_region"], options["weight_attribute"])
     core = {p.name: options[p.name] for p in PARAMETERS if not p.adapter_only}
     points, faces = mesh.vertex_matrix(), mesh.face_matrix()
     # The fill works in the input frame, where the asymmetry (distance moved) is measured.
-    result = symmetrize(points, pairs.left, pairs.right, pairs.ids, pairs.midline,
-                        left_weights, right_weights, progress, **{**core, "output_frame": "input"})
+    core["output_frame"] = "input"
+    if options["pairs"] == "auto":  # the landmark attributes are not read
+        result = symmetrize(points, progress=progress, faces=faces, **core)
+        left = right = np.zeros(0, dtype=np.int64)
+    else:
+        names = {name: options[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
+        pairs, left_weights, right_weights = read_landmark_attributes(mesh, **names)
+        result = symmetrize(points, pairs.left, pairs.right, pairs.ids, pairs.midline,
+                            left_weights, right_weights, progress, faces, **core)
+        left, right = pairs.left, pairs.right
     report = result.report
     if region is not None:
         missing, excluded = region
@@ -137,9 +143,9 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress) -> SymmetrizationRes
         transform = np.array(report["canonical_from_input"])
         result = dataclasses.replace(result, points=result.points @ transform[:3, :3].T + transform[:3, 3])
         report.update(output_frame="canonical", plane_normal=[1.0, 0.0, 0.0], plane_offset=0.0)
-    before = mirror_asymmetry(points, faces, fit_mirror_plane(points[pairs.left], points[pairs.right]))
+    before = mirror_asymmetry(points, faces, fit_mirror_plane(points[left], points[right]) if len(left) else None)
     after = mirror_asymmetry(result.points, faces,
-                             fit_mirror_plane(result.points[pairs.left], result.points[pairs.right]))
+                             fit_mirror_plane(result.points[left], result.points[right]) if len(left) else None)
     report["mirror_asymmetry_before"] = {k: v for k, v in before.items() if k != "per_vertex"}
     report["mirror_asymmetry_after"] = {k: v for k, v in after.items() if k != "per_vertex"}
     return result

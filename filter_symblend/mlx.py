@@ -104,13 +104,15 @@ def symblend_node(options: dict, position: int = 0) -> FilterNode:
                          **{f"enum_val{i}": choice for i, choice in enumerate(p.choices)})
         elif p.kind == "float":
             param.update(type="RichFloat", value=repr(float(value)))
+        elif p.kind == "int":
+            param.update(type="RichInt", value=str(int(value)))
         else:
             param.update(type="RichString", value=value)
         params.append(param)
     return FilterNode(DISPLAY_NAME, params, position)
 
 
-_OUR_TYPES = {"enum": "RichEnum", "float": "RichFloat", "string": "RichString"}
+_OUR_TYPES = {"enum": "RichEnum", "int": "RichInt", "float": "RichFloat", "string": "RichString"}
 
 
 def symblend_options(node: FilterNode, path) -> dict:
@@ -132,6 +134,8 @@ def symblend_options(node: FilterNode, path) -> dict:
                 given[name] = declared.choices[int(value)]
             elif declared.kind == "float":
                 given[name] = float(value)
+            elif declared.kind == "int":
+                given[name] = int(value)
             else:
                 given[name] = value
         except (ValueError, IndexError):

@@ -13,6 +13,8 @@ import math
 import re
 from typing import Any
 
+import numpy as np
+
 from .errors import ParameterError
 
 ATTRIBUTE_NAME_PATTERN = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -22,7 +24,7 @@ ATTRIBUTE_NAME_PATTERN = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 class Parameter:
     """One filter parameter.
 
-    kind is "enum", "float" or "string". Floats have bounds; ``minimum_open``
+    kind is "enum", "int", "float" or "string". Numbers have bounds; ``minimum_open``
     makes the lower bound exclusive. Enums list their ``choices``.
     ``adapter_only`` parameters are taken by the MeshSet filter, not by the
     array-level ``symmetrize``.
@@ -56,8 +58,15 @@ class Parameter:
                     f"underscores (MeshLab expressions can only read such names), got {value!r}."
                 )
             return value
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
             raise ParameterError(f"`{self.name}` must be a number, got {value!r}.")
+        if self.kind == "int":
+            if float(value) != int(value):
+                raise ParameterError(f"`{self.name}` must be a whole number, got {value!r}.")
+            value = int(value)
+            if value < self.minimum or value > self.maximum:
+                raise ParameterError(f"`{self.name}` must be in {self.range_text()}, got {value!r}.")
+            return value
         value = float(value)
         if not math.isfinite(value):
             raise ParameterError(f"`{self.name}` must be finite, got {value!r}.")
@@ -74,6 +83,8 @@ class Parameter:
             return ", ".join(self.choices)
         if self.kind == "string":
             return "name of letters, digits, _"
+        if self.kind == "int":
+            return f"{self.minimum:d}..{self.maximum:d}"
         left = "(" if self.minimum_open else "["
         return f"{left}{self.minimum:g}, {self.maximum:g}]"
 
@@ -106,6 +117,37 @@ PARAMETERS: tuple[Parameter, ...] = (
         "Weight of the terms that keep the two sides spaced apart as in the "
         "(locally transformed) input; the paper uses 0.01.",
         minimum=0.0, maximum=100.0, minimum_open=True,
+    ),
+    Parameter(
+        "pairs", "enum", "landmarks", "Pairs",
+        "Where the mirror pairs come from. 'landmarks': the pair attribute (the paper). 'auto': "
+        "found on the surface, no landmarks needed: the best mirror plane (reflection ICP from "
+        "several starting planes) seeds a vertex-to-vertex mirror correspondence, which grows "
+        "along the surface with local mirror maps; pairs spread over it are symmetrized, and "
+        "the pairing is repeated on the output until it stops changing. For scans and mildly "
+        "deformed shapes; strongly bent or articulated ones need landmarks. 'landmarks+auto': "
+        "the landmarks are solved first, then automatic pairs found on that output join them "
+        "and the solve is repeated, so the whole surface, not only the landmarks, comes out "
+        "symmetric; the landmarks are always kept and weigh `landmark_priority` times more.",
+        choices=("landmarks", "auto", "landmarks+auto"),
+    ),
+    Parameter(
+        "auto_pair_count", "int", 1000, "Automatic pair count",
+        "How many automatic pairs (and midline points) to use, spread over the surface by "
+        "farthest-point sampling; fewer if fewer are found.",
+        minimum=10, maximum=100000,
+    ),
+    Parameter(
+        "auto_iterations", "int", 5, "Automatic pairing rounds",
+        "Most pairing-and-solve rounds for 'auto' and 'landmarks+auto'; the rounds stop earlier "
+        "when fewer than 0.1 % of the vertices change twin.",
+        minimum=1, maximum=50,
+    ),
+    Parameter(
+        "landmark_priority", "float", 10.0, "Landmark priority",
+        "With 'landmarks+auto': how many times more a landmark pair weighs than an automatic "
+        "one in both steps of the solve.",
+        minimum=1.0, maximum=1000.0,
     ),
     Parameter(
         "pair_attribute", "string", "symblend_pair", "Landmark pair attribute",

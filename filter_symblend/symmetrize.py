@@ -11,13 +11,15 @@ from typing import Any
 import numpy as np
 
 from .asymmetry import fit_mirror_plane
-from .errors import LandmarkError, SymblendWarning, id_list
+from .auto_pairs import mirror_correspondence, spread_pairs
+from .errors import GeometryError, LandmarkError, SymblendWarning, id_list
 from .geometry import minimal_rotation, normalize, rigid_fit
 from .global_solve import MINUS_X, global_solve
-from .landmarks import LandmarkPairs, check_pairs, check_points, midline_labels
+from .landmarks import MIN_PAIRS, LandmarkPairs, check_pairs, check_points, midline_labels
 from .local_symmetries import LocalSymmetries, local_symmetries
 from .neighbourhoods import mean_nearest_spacing, pair_weights, require_connected, scaled_weights
 from .parameters import keyword_signature, parameters_doc, validate_parameters
+from .surface_symmetry import fit_surface_mirror_plane
 from .warp import thin_plate_spline_warp
 
 # A pair's own mirror misfit, in neighbourhood radii, above which it is reported.
@@ -26,6 +28,7 @@ from .warp import thin_plate_spline_warp
 # above 2 with 60 pairs. Subtler mispairings cannot be told from real deformation.
 POOR_PAIR_MISFIT = 1.5
 SWAPPED_COSINE = -0.5  # a pair whose gap points this far against its local normal looks swapped
+CONVERGED_CHANGE = 1e-3  # automatic pairing has converged when fewer vertices than this change twin
 
 
 @dataclasses.dataclass(frozen=True)
@@ -107,27 +110,11 @@ def _report_progress(progress, percent: float, message: str) -> None:
         progress(percent, message)
 
 
-def symmetrize(points, left, right, pair_ids=None, midline=None, left_weights=None, right_weights=None,
-               progress=None, **params) -> SymmetrizationResult:
+def _solve(points: np.ndarray, left, right, ids, midline, wl, wr, options: dict, progress,
+           warn: bool = True) -> SymmetrizationResult:
+    """Step 1, Step 2 and the warp for checked pairs. ``wl``, ``wr`` (n,) >= 0 weigh each
+    landmark's input geometry (0: missing side; above 1: a pair that counts more)."""
     clock = {"start": time.perf_counter()}
-    _report_progress(progress, 0.0, "checking landmarks")
-    options = validate_parameters(params, adapter=False)
-    points = check_points(points)
-    left, right = _integer_indices("left", left), _integer_indices("right", right)
-    midline = _integer_indices("midline", [] if midline is None else midline)
-    ids = np.arange(1, len(left) + 1) if pair_ids is None else np.asarray(pair_ids).ravel()
-    if not (len(left) == len(right) == len(ids)):
-        raise LandmarkError(
-            f"`left`, `right` and `pair_ids` must have one entry per pair; got {len(left)}, "
-            f"{len(right)} and {len(ids)}.")
-    check_pairs(points, LandmarkPairs(ids, left, right, midline))
-    wl = _landmark_weights("left_weights", left_weights, len(left), ids)
-    wr = _landmark_weights("right_weights", right_weights, len(left), ids)
-    both_missing = (wl == 0) & (wr == 0)
-    if both_missing.any():
-        raise LandmarkError(f"Pair {ids[both_missing][0]} has weight 0 on both sides, so nothing "
-                            "says where it goes; give the sound side weight 1, or remove the pair.")
-
     # Midline landmarks join the solve as pairs whose two sides are one vertex,
     # held on the plane; labels for messages.
     n, m = len(left), len(midline)
@@ -147,13 +134,14 @@ def symmetrize(points, left, right, pair_ids=None, midline=None, left_weights=No
     phi = pair_weights(p0, q0, phi_h)
     require_connected(phi, p0, q0, labels, spacing, "phi_width", options["phi_width"])
     theta = phi if theta_h == phi_h else pair_weights(p0, q0, theta_h)
-    if (wl * wr != 1).any():  # a broken side must not shape the local symmetries around it
-        theta = scaled_weights(theta, np.ones(n + m), wl * wr)
+    if (wl * wr != 1).any():  # a broken side must not shape the local symmetries around it,
+        theta = scaled_weights(theta, np.ones(n + m), wl * wr)  # a landmark of priority shapes them more
     clock["neighbourhoods"] = time.perf_counter()
     _report_progress(progress, 10.0, f"local symmetries ({options['mode']})")
 
     local = local_symmetries(options["mode"], theta, p0, q0, labels)
-    _warn_about_local_fits(local, p0, q0, labels, options["mode"])
+    if warn:
+        _warn_about_local_fits(local, p0, q0, labels, options["mode"])
     clock["local_transforms"] = time.perf_counter()
     _report_progress(progress, 25.0, f"global solve ({n + m} pairs)")
 
@@ -217,11 +205,125 @@ def symmetrize(points, left, right, pair_ids=None, midline=None, left_weights=No
     return SymmetrizationResult(warped, asymmetry, report)
 
 
+def _checked_landmarks(points, left, right, pair_ids, midline, left_weights, right_weights):
+    left, right = _integer_indices("left", left), _integer_indices("right", right)
+    midline = _integer_indices("midline", [] if midline is None else midline)
+    ids = np.arange(1, len(left) + 1) if pair_ids is None else np.asarray(pair_ids).ravel()
+    if not (len(left) == len(right) == len(ids)):
+        raise LandmarkError(
+            f"`left`, `right` and `pair_ids` must have one entry per pair; got {len(left)}, "
+            f"{len(right)} and {len(ids)}.")
+    check_pairs(points, LandmarkPairs(ids, left, right, midline))
+    wl = _landmark_weights("left_weights", left_weights, len(left), ids)
+    wr = _landmark_weights("right_weights", right_weights, len(left), ids)
+    both_missing = (wl == 0) & (wr == 0)
+    if both_missing.any():
+        raise LandmarkError(f"Pair {ids[both_missing][0]} has weight 0 on both sides, so nothing "
+                            "says where it goes; give the sound side weight 1, or remove the pair.")
+    return left, right, ids, midline, wl, wr
+
+
+def symmetrize(points, left=None, right=None, pair_ids=None, midline=None, left_weights=None,
+               right_weights=None, progress=None, faces=None, **params) -> SymmetrizationResult:
+    _report_progress(progress, 0.0, "checking landmarks")
+    options = validate_parameters(params, adapter=False)
+    points = check_points(points)
+    faces = np.zeros((0, 3), dtype=np.int64) if faces is None else np.asarray(faces, dtype=np.int64)
+    given = left is not None or right is not None or midline is not None
+    if options["pairs"] == "auto":
+        if given:
+            raise LandmarkError("`pairs='auto'` finds its own pairs and ignores landmarks; to use "
+                                "yours as well, pass pairs='landmarks+auto'.")
+        return auto_symmetrize(points, faces, None, options, progress)
+    if left is None or right is None:
+        raise LandmarkError(f"`pairs='{options['pairs']}'` needs landmark pairs: pass `left` and "
+                            "`right` vertex indices, or use pairs='auto'.")
+    landmarks = _checked_landmarks(points, left, right, pair_ids, midline, left_weights, right_weights)
+    if options["pairs"] == "landmarks+auto":
+        return auto_symmetrize(points, faces, landmarks, options, progress)
+    return _solve(points, *landmarks, options, progress)
+
+
+def auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: dict,
+                    progress) -> SymmetrizationResult:
+    """The 'auto' and 'landmarks+auto' modes: rounds of (pair on the current output, solve on
+    the input) until the mirror correspondence stops changing.
+
+    ``landmarks``: None, or the checked (left, right, ids, midline, wl, wr) of the user's pairs,
+    solved alone first and always kept, weighted ``landmark_priority`` times more.
+    """
+    clock = time.perf_counter()
+    rounds = options["auto_iterations"]
+    step = 90.0 / (rounds + (landmarks is not None))
+    if landmarks is None:
+        _report_progress(progress, 2.0, "fitting the mirror plane")
+        normal, offset = fit_surface_mirror_plane(points)
+        user_left = user_right = user_midline = np.zeros(0, dtype=np.int64)
+        current, first_round = points, 5.0
+    else:
+        user_left, user_right, user_ids, user_midline, user_wl, user_wr = landmarks
+        result = _solve(points, *landmarks, options, _scaled_progress(progress, 5.0, step))
+        current, normal, offset = result.points, result.report["plane_normal"], result.report["plane_offset"]
+        first_round = 5.0 + step
+    fixed = np.concatenate([user_left, user_right, user_midline])
+    history, previous, converged = [], None, False
+    for round_index in range(rounds):
+        start = first_round + round_index * step
+        _report_progress(progress, start, f"automatic pairs, round {round_index + 1}")
+        correspondence = mirror_correspondence(current, faces, normal, offset,
+                                               (user_left, user_right), user_midline)
+        left, right, midline = spread_pairs(current, correspondence, options["auto_pair_count"], fixed)
+        changed = 1.0 if previous is None else float(np.mean(correspondence.partner != previous))
+        history.append({"pairs": int(len(left)), "midline": int(len(midline)),
+                        "paired_vertices": float(correspondence.paired_fraction),
+                        "changed_vertices": changed, "growth_waves": correspondence.waves})
+        if len(left) + len(user_left) < MIN_PAIRS:
+            raise GeometryError(
+                f"Automatic pairing found {len(left)} mirror pair(s) on the surface (round {round_index + 1}); "
+                f"it needs at least {MIN_PAIRS}. The shape may be too far from mirror-symmetric for "
+                "automatic pairs: place a few landmark pairs and use pairs='landmarks+auto'.")
+        if previous is not None and changed < CONVERGED_CHANGE:
+            converged = True
+            break
+        ids = np.concatenate([user_ids if landmarks else [], [f"automatic {k}" for k in range(1, len(left) + 1)]])
+        priority = options["landmark_priority"]
+        wl = np.concatenate([priority * user_wl, np.ones(len(left))]) if landmarks else np.ones(len(left))
+        wr = np.concatenate([priority * user_wr, np.ones(len(left))]) if landmarks else np.ones(len(left))
+        result = _solve(points, np.concatenate([user_left, left]), np.concatenate([user_right, right]),
+                        ids, np.concatenate([user_midline, midline]), wl, wr, options,
+                        _scaled_progress(progress, start, step), warn=False)
+        current, normal, offset = result.points, result.report["plane_normal"], result.report["plane_offset"]
+        previous = correspondence.partner
+    _report_progress(progress, 100.0, "done")
+    pair_count = len(user_left)
+    report = {**result.report, "pair_count": int(pair_count), "midline_count": int(len(user_midline)),
+              "auto_pairs": {"pair_count": int(result.report["pair_count"] - pair_count),
+                             "midline_count": int(result.report["midline_count"] - len(user_midline)),
+                             "rounds": history, "converged": converged}}
+    if landmarks is None:
+        report.pop("landmark_asymmetry_before")
+        report.pop("landmark_asymmetry_after")
+    else:
+        report["landmark_asymmetry_before"] = fit_mirror_plane(points[user_left], points[user_right]).summary(
+            report["diagonal"])
+        report["landmark_asymmetry_after"] = fit_mirror_plane(
+            result.points[user_left], result.points[user_right]).summary(report["diagonal"])
+    report["seconds"] = {**report["seconds"], "total": time.perf_counter() - clock}
+    return dataclasses.replace(result, report=report)
+
+
+def _scaled_progress(progress, start: float, width: float):
+    """``progress`` for a sub-task that reports 0..100 % into start..start + width."""
+    if progress is None:
+        return None
+    return lambda percent, message: progress(start + width * percent / 100.0, message)
+
+
 symmetrize.__signature__ = keyword_signature(
     *(inspect.Parameter(name, inspect.Parameter.POSITIONAL_OR_KEYWORD, default=default)
-      for name, default in (("points", inspect.Parameter.empty), ("left", inspect.Parameter.empty),
-                            ("right", inspect.Parameter.empty), ("pair_ids", None), ("midline", None),
-                            ("left_weights", None), ("right_weights", None), ("progress", None))),
+      for name, default in (("points", inspect.Parameter.empty), ("left", None), ("right", None),
+                            ("pair_ids", None), ("midline", None), ("left_weights", None),
+                            ("right_weights", None), ("progress", None), ("faces", None))),
     adapter=False)
 symmetrize.__doc__ = f"""Symmetrize ``points`` (N, 3) so that each pair (left[k], right[k]) becomes mirror-symmetric.
 

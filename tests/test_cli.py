@@ -35,7 +35,7 @@ def test_symmetrize_writes_the_mesh_and_the_report(tmp_path, bent_cow_files, cap
     output, report = tmp_path / "out.ply", tmp_path / "report.json"
     assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "-o", str(output),
                  "--report", str(report), "--mode", "articulated", "--phi-width", "6"]) == 0
-    assert "80 pairs, mode articulated" in capsys.readouterr().out
+    assert "80 landmark pairs, mode articulated" in capsys.readouterr().out
     data = json.loads(report.read_text())
     assert data["mode"] == "articulated" and data["phi_width"] == 6 and data["pair_count"] == 80
     assert data["hausdorff_input_output"]["max"] > 0 and data["landmarks"]["snap_distance_max"] < 1e-5
@@ -85,7 +85,7 @@ def test_pair_table_option(tmp_path, bent_cow_files, capsys):
     write_landmarks(tmp_path / "numbered.csv", renamed)
     (tmp_path / "pairs.csv").write_text("\n".join(f"{2 * k + 1},{2 * k + 2}" for k in range(80)))
     assert main(["landmarks", "check", str(mesh_path), "-l", str(tmp_path / "numbered.csv"),
-                 "--pairs", str(tmp_path / "pairs.csv")]) == 0
+                 "--pair-table", str(tmp_path / "pairs.csv")]) == 0
     assert "80 pairs" in capsys.readouterr().out
 
 
@@ -206,14 +206,14 @@ def test_an_output_format_pymeshlab_cannot_write(tmp_path, bent_cow_files, capsy
 
 def test_mlx_runs_a_preset_with_a_landmark_file(tmp_path, bent_cow_files, capsys):
     mesh_path, landmark_path, *_ = bent_cow_files
-    preset = pathlib.Path(__file__).resolve().parents[1] / "mlx_presets" / "scan_cleanup.mlx"
+    preset = pathlib.Path(__file__).resolve().parents[1] / "mlx_presets" / "articulated_pose.mlx"
     output, report = tmp_path / "clean.ply", tmp_path / "steps.json"
     assert main(["mlx", str(preset), str(mesh_path), "-l", str(landmark_path), "-o", str(output),
                  "--report", str(report)]) == 0
-    assert "2 filters of" in capsys.readouterr().out
+    assert "1 filters of" in capsys.readouterr().out
     ms = pymeshlab.MeshSet()
     ms.load_new_mesh(str(output))
-    assert ms.current_mesh().face_number() == 5804 // 2
+    assert ms.current_mesh().face_number() == 5804
     steps = json.loads(report.read_text())["steps"]
     assert steps[0]["output"]["pair_count"] == 80
 

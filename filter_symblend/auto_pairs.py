@@ -1,0 +1,236 @@
+"""Automatic mirror pairs: a dense vertex-to-vertex mirror correspondence found by the surface itself.
+
+Seeds come from one global mirror plane: vertices whose reflection lands on
+another vertex (mutual nearest neighbours) facing the mirrored way. A single
+plane cannot pair a bent or articulated shape, so the correspondence then
+grows in waves from the seeds: around each unpaired vertex, the pairs already
+found give a local mirror map (an affine map fitted to its nearest paired
+vertices, pulled toward the best improper rigid map), which predicts where
+the vertex's twin lies. The nearest vertex there is accepted if it is close
+to the prediction, faces the mirrored way, and predicts the vertex back.
+The map follows the shape as it bends, so the pairing reaches every part the
+seeds connect to, whatever single plane the whole shape is far from.
+
+Units: ``spacing`` is the mean edge length (mean nearest-neighbour distance
+for a point cloud); distances below are multiples of it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .geometry import MIRROR_X, normalize, proper_rotation_fit, reflection_across_plane
+
+# Acceptance distance, x spacing: twice the median distance from a reflected vertex to its
+# mutual nearest neighbour, within these bounds. On pymeshlab's cow symmetrized from 100
+# landmarks, 0.1 pairs 96.6 % of vertices correctly and 0.5 only 94 % (a wrong pair is
+# forced symmetric by the next solve, so strictness pays); a scan whose two sides are
+# tessellated differently needs up to about 0.5 to find pairs at all.
+MIN_MATCH_DISTANCE = 0.1
+MAX_MATCH_DISTANCE = 0.5
+SEED_COSINE = 0.9  # normals of a seed pair agree under the reflection at least this well
+MATCH_COSINE = 0.7  # the same for grown pairs
+NEIGHBOURS = 12  # paired vertices fitting each local mirror map
+FRONTIER = 3.0  # x spacing: vertices this close to the paired region are tried in a wave
+RIDGE = 0.05  # pull of the local affine map toward the rigid one, x the neighbourhood's spread
+POINT_CLOUD_NORMAL_NEIGHBOURS = 12
+
+
+@dataclasses.dataclass(frozen=True)
+class MirrorCorrespondence:
+    """Mirror twin of every vertex.
+
+    partner (N,): index of the vertex's twin, itself on the midline, -1 if unpaired.
+    side (N,): +1 left, -1 right, 0 on the midline or unpaired (consistent along the
+    surface: the seeds' side of the global plane, carried along as the pairing grows).
+    seeds: number of vertices paired by the global plane (both sides and midline).
+    waves: number of growth waves.
+    """
+
+    partner: np.ndarray
+    side: np.ndarray
+    seeds: int
+    waves: int
+
+    @property
+    def paired_fraction(self) -> float:
+        return float(np.mean(self.partner >= 0))
+
+
+def vertex_normals(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, bool]:
+    """Unit normals (N, 3) and whether they are oriented.
+
+    Meshes: area-weighted face normals summed at the vertices (oriented).
+    Point clouds (no faces): the least-spread direction of each point's
+    neighbours (unoriented: compare with ``abs`` of the cosine).
+    """
+    if len(faces):
+        corners = points[faces]
+        face_normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        summed = np.zeros_like(points)
+        for corner in range(3):
+            np.add.at(summed, faces[:, corner], face_normals)
+        return normalize(summed), True
+    _, nearest = cKDTree(points).query(points, k=min(len(points), POINT_CLOUD_NORMAL_NEIGHBOURS))
+    neighbours = points[nearest] - points[nearest].mean(axis=1, keepdims=True)
+    _, vectors = np.linalg.eigh(np.einsum("nki,nkj->nij", neighbours, neighbours))
+    return vectors[:, :, 0], False
+
+
+def mean_spacing(points: np.ndarray, faces: np.ndarray) -> float:
+    """Mean edge length of the mesh, or mean nearest-neighbour distance of a point cloud."""
+    if len(faces):
+        corners = points[faces]
+        return float(np.mean(np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)))
+    return float(cKDTree(points).query(points, k=2)[0][:, 1].mean())
+
+
+def _agreement(mapped_normals: np.ndarray, normals: np.ndarray, oriented: bool) -> np.ndarray:
+    cosine = np.einsum("ni,ni->n", normalize(mapped_normals), normals)
+    return cosine if oriented else np.abs(cosine)
+
+
+def _seed(points, normals, oriented, tree, spacing, plane_normal, plane_offset):
+    """(partner, side, acceptance distance) of the vertices a single mirror plane pairs reliably."""
+    n = len(points)
+    distance, nearest = tree.query(reflection_across_plane(points, plane_normal, plane_offset))
+    index = np.arange(n)
+    mutual = nearest[nearest] == index
+    if not mutual.any():
+        return np.full(n, -1), np.zeros(n, dtype=np.int8), MIN_MATCH_DISTANCE * spacing
+    tolerance = spacing * np.clip(2.0 * np.median(distance[mutual]) / spacing,
+                                  MIN_MATCH_DISTANCE, MAX_MATCH_DISTANCE)
+    mirrored_normals = normals - 2.0 * np.outer(normals @ plane_normal, plane_normal)
+    good = (mutual & (distance < tolerance)
+            & (_agreement(mirrored_normals, normals[nearest], oriented) > SEED_COSINE))
+    partner = np.where(good, nearest, -1)
+    height = points @ plane_normal - plane_offset
+    side = np.where(good & (nearest != index), np.sign(height), 0).astype(np.int8)
+    return partner, side, tolerance
+
+
+def _local_maps(points, partner, sources, paired_tree, paired):
+    """Local mirror maps around ``sources`` (m,): (linear (m, 3, 3), centre (m, 3), image centre (m, 3),
+    improper rigid part (m, 3, 3), neighbour indices (m, k)) fitted on the nearest paired vertices."""
+    k = min(NEIGHBOURS, len(paired))
+    _, nearest = paired_tree.query(points[sources], k=k)
+    neighbours = paired[nearest.reshape(len(sources), k)]
+    x, y = points[neighbours], points[partner[neighbours]]
+    cx, cy = x.mean(axis=1), y.mean(axis=1)
+    x, y = x - cx[:, None], y - cy[:, None]
+    cross = np.einsum("nki,nkj->nij", y, x)
+    spread = np.einsum("nki,nkj->nij", x, x)
+    rigid = proper_rotation_fit(cross @ MIRROR_X) @ MIRROR_X  # best y ~ R J x, R proper
+    ridge = RIDGE * np.trace(spread, axis1=1, axis2=2)[:, None, None] / 3.0
+    linear = (cross + ridge * rigid) @ np.linalg.inv(spread + ridge * np.eye(3))
+    return linear, cx, cy, rigid, neighbours
+
+
+def _predict(points, normals, partner, sources, paired_tree, paired):
+    """Predicted twin position (m, 3), mapped normal (m, 3) and side vote (m,) for ``sources``."""
+    linear, cx, cy, rigid, neighbours = _local_maps(points, partner, sources, paired_tree, paired)
+    predicted = np.einsum("nij,nj->ni", linear, points[sources] - cx) + cy
+    mapped_normals = np.einsum("nij,nj->ni", rigid, normals[sources])
+    return predicted, mapped_normals, neighbours
+
+
+def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, plane_offset: float,
+                          fixed_pairs: tuple[np.ndarray, np.ndarray] | None = None,
+                          fixed_midline: np.ndarray | None = None) -> MirrorCorrespondence:
+    """Mirror twins of the vertices ``points`` (N, 3) of a mesh (``faces`` (F, 3), may be empty).
+
+    ``plane_normal`` (3,), ``plane_offset``: the global mirror plane the seeds come
+    from (normal . x = offset; the normal points to the left side). ``fixed_pairs``
+    (left (n,), right (n,)) and ``fixed_midline`` (m,): vertex indices of known pairs
+    (the user's landmarks), seeded as given.
+    """
+    points = np.asarray(points, dtype=float)
+    plane_normal = normalize(np.asarray(plane_normal, dtype=float))
+    normals, oriented = vertex_normals(points, faces)
+    spacing = mean_spacing(points, faces)
+    tree = cKDTree(points)
+    partner, side, tolerance = _seed(points, normals, oriented, tree, spacing, plane_normal, plane_offset)
+    if fixed_pairs is not None:
+        left, right = fixed_pairs
+        stale = np.isin(partner, np.concatenate([left, right]))  # vertices seeded onto a landmark
+        partner[stale], side[stale] = -1, 0
+        partner[left], partner[right] = right, left
+        side[left], side[right] = 1, -1
+    if fixed_midline is not None:
+        partner[fixed_midline], side[fixed_midline] = fixed_midline, 0
+    seeds = int(np.count_nonzero(partner >= 0))
+    waves = 0
+    while seeds >= 4:
+        paired = np.flatnonzero(partner >= 0)
+        paired_tree = cKDTree(points[paired])
+        unpaired = np.flatnonzero(partner < 0)
+        gap, _ = paired_tree.query(points[unpaired], distance_upper_bound=FRONTIER * spacing)
+        sources = unpaired[np.isfinite(gap)]
+        if len(sources) == 0:
+            break
+        predicted, mapped_normals, neighbours = _predict(points, normals, partner, sources, paired_tree, paired)
+        distance, twin = tree.query(predicted)
+        good = ((distance < tolerance) & ((partner[twin] < 0) | (twin == sources))
+                & ((twin == sources) | (_agreement(mapped_normals, normals[twin], oriented) > MATCH_COSINE)))
+        sources, twin, distance = sources[good], twin[good], distance[good]
+        # One source per twin (the closest), then the twin must predict the source back.
+        order = np.lexsort((distance, twin))
+        first = np.ones(len(order), dtype=bool)
+        first[1:] = twin[order][1:] != twin[order][:-1]
+        sources, twin = sources[order[first]], twin[order[first]]
+        back, _, _ = _predict(points, normals, partner, twin, paired_tree, paired)
+        mutual = (twin == sources) | (tree.query(back)[1] == sources)
+        sources, twin, neighbours = sources[mutual], twin[mutual], neighbours[good][order[first]][mutual]
+        # A vertex that is its own twin is on the midline; the others claim sides from their neighbours.
+        votes = np.sign(side[neighbours].sum(axis=1)).astype(np.int8)
+        pairs = twin != sources
+        keep = ~pairs | (votes != 0)
+        sources, twin, votes = sources[keep], twin[keep], votes[keep]
+        # The same pair found from both ends counts once; a vertex in two different pairs
+        # waits for the next wave.
+        low, high = np.minimum(sources, twin), np.maximum(sources, twin)
+        _, first = np.unique(low * len(points) + high, return_index=True)
+        sources, twin, votes = sources[first], twin[first], votes[first]
+        uses = np.bincount(np.concatenate([sources, twin[twin != sources]]), minlength=len(points))
+        single = (uses[sources] == 1) & (uses[twin] == 1)
+        s, t, v = sources[single], twin[single], votes[single]
+        if len(s) == 0:
+            break
+        partner[s], partner[t] = t, s
+        side[s], side[t] = np.where(s == t, 0, v), np.where(s == t, 0, -v)
+        waves += 1
+    return MirrorCorrespondence(partner, side, seeds, waves)
+
+
+def farthest_point_order(points: np.ndarray, count: int) -> np.ndarray:
+    """Indices (count,) into ``points`` (n, 3) by farthest-point sampling from the point nearest
+    the centroid (a start that does not depend on the vertex order)."""
+    start = int(np.argmin(np.linalg.norm(points - points.mean(axis=0), axis=1)))
+    chosen = np.empty(count, dtype=np.int64)
+    chosen[0] = start
+    distance = np.linalg.norm(points - points[start], axis=1)
+    for k in range(1, count):
+        chosen[k] = np.argmax(distance)
+        np.minimum(distance, np.linalg.norm(points - points[chosen[k]], axis=1), out=distance)
+    return chosen
+
+
+def spread_pairs(points: np.ndarray, correspondence: MirrorCorrespondence, count: int,
+                 exclude: np.ndarray | None = None):
+    """About ``count`` pairs and midline vertices spread over the surface by farthest-point
+    sampling of the left and midline vertices. Returns (left (n,), right (n,), midline (m,)).
+    ``exclude``: vertices not to use (e.g. those already holding a landmark)."""
+    partner, side = correspondence.partner, correspondence.side
+    usable = (side > 0) | ((partner >= 0) & (partner == np.arange(len(points))))
+    if exclude is not None:
+        usable[exclude] = False
+        usable[partner[exclude][partner[exclude] >= 0]] = False
+    candidates = np.flatnonzero(usable)
+    if len(candidates) > count:
+        candidates = np.sort(candidates[farthest_point_order(points[candidates], count)])
+    on_midline = side[candidates] == 0
+    left = candidates[~on_midline]
+    return left, partner[left], candidates[on_midline]
