@@ -204,6 +204,36 @@ def test_an_output_format_pymeshlab_cannot_write(tmp_path, bent_cow_files, capsy
     assert not list(tmp_path.glob("*xyzzy*")) and not list(tmp_path.glob(".*partial*"))
 
 
+def test_symmetrize_with_automatic_pairs_needs_no_landmark_file(tmp_path, cow, capsys):
+    mesh_path, output, report = tmp_path / "scan.obj", tmp_path / "out.ply", tmp_path / "report.json"
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=synthetic.bend(cow.points, 0.2), face_matrix=cow.faces))
+    ms.save_current_mesh(str(mesh_path))
+    assert main(["symmetrize", str(mesh_path), "--pairs", "auto", "--auto-pair-count", "800", "-o", str(output),
+                 "--report", str(report)]) == 0
+    printed = capsys.readouterr().out
+    data = json.loads(report.read_text())
+    automatic = data["auto_pairs"]
+    assert automatic["pair_count"] + automatic["midline_count"] == 800 and data["landmarks"] is None
+    assert f"0 landmark pairs + {automatic['pair_count']} automatic pairs" in printed
+    assert "landmark asymmetry" not in printed
+    assert data["mirror_asymmetry_after"]["rms"] < data["mirror_asymmetry_before"]["rms"] / 2
+
+
+@pytest.mark.parametrize(("pairs", "with_file", "message"), [
+    ("auto", True, "--pairs auto finds its own pairs; leave out -l, or use --pairs landmarks+auto."),
+    ("landmarks", False, "Give a landmark file (-l LANDMARKS), or --pairs auto to find pairs on the surface"),
+    ("landmarks+auto", False, "Give a landmark file (-l LANDMARKS), or --pairs auto"),
+])
+def test_symmetrize_checks_the_landmark_file_against_the_pair_source(tmp_path, bent_cow_files, capsys, pairs,
+                                                                      with_file, message):
+    mesh_path, landmark_path, *_ = bent_cow_files
+    output = tmp_path / "out.ply"
+    arguments = ["symmetrize", str(mesh_path), "--pairs", pairs, "-o", str(output)]
+    assert main(arguments + (["-l", str(landmark_path)] if with_file else [])) == 1
+    assert message in capsys.readouterr().err and not output.exists()
+
+
 def test_mlx_runs_a_preset_with_a_landmark_file(tmp_path, bent_cow_files, capsys):
     mesh_path, landmark_path, *_ = bent_cow_files
     preset = pathlib.Path(__file__).resolve().parents[1] / "mlx_presets" / "articulated_pose.mlx"
