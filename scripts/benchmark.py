@@ -12,6 +12,7 @@ Seconds are the filter's own stage timings (median of --repeat runs).
 
     python scripts/benchmark.py [--pairs 100 300 1000] [--repeat 3] [--meshes cow spot]
     python scripts/benchmark.py --scale      # speed and memory at scale, and the paper's Table 1
+    python scripts/benchmark.py --auto       # automatic pairs against 100 landmark pairs
 """
 
 from __future__ import annotations
@@ -159,12 +160,45 @@ def scale_main(args) -> None:
     table_1()
 
 
+def auto_main(args) -> None:
+    """Rows for pairs='auto' and 'landmarks+auto' (affine mode) beside 100 landmark pairs."""
+    header = ["mesh", "scenario", "input", "100 landmarks", "auto", "landmarks+auto", "auto rounds",
+              "s auto", "s landmarks+auto"]
+    print("shape / sym error, % of the diagonal (lower is better); affine mode")
+    print("| " + " | ".join(header) + " |")
+    print("|" + "---|" * len(header))
+    for mesh in args.meshes:
+        if not MESHES[mesh].exists():
+            print(f"| {mesh} | skipped: {MESHES[mesh]} is absent |")
+            continue
+        points, offset, partner, all_left, all_right = load(MESHES[mesh])
+        ms = pymeshlab.MeshSet()
+        ms.load_new_mesh(str(MESHES[mesh]))
+        faces = ms.current_mesh().face_matrix()
+        left, right = synthetic.farthest_point_pairs(points, offset, partner, 100)
+        cases = [("symmetric", points, None), ("bend 0.2 rad", synthetic.bend(points, 0.2), None),
+                 *scenarios(points, mesh)]
+        for name, deformed, limb in cases:
+            region = slice(None) if limb is None else np.concatenate([limb, partner[limb]])
+            deformed = synthetic.random_rigid(deformed, seed=7)
+            automatic = symmetrize(deformed, faces=faces, pairs="auto", mode="affine")
+            hybrid = symmetrize(deformed, left, right, faces=faces, pairs="landmarks+auto", mode="affine")
+            cells = [errors(out, points, all_left, all_right, region) for out in
+                     (deformed, symmetrize(deformed, left, right, mode="affine").points, automatic.points,
+                      hybrid.points)]
+            rounds = automatic.report["auto_pairs"]
+            cells += [f"{len(rounds['rounds'])}{'' if rounds['converged'] else ' (not converged)'}",
+                      f"{automatic.report['seconds']['total']:.2f}", f"{hybrid.report['seconds']['total']:.2f}"]
+            print(f"| {mesh} | {name} | " + " | ".join(cells) + " |", flush=True)
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--pairs", type=int, nargs="+", default=[100, 300, 1000])
     parser.add_argument("--repeat", type=int, default=3, help="runs per cell for the timings")
     parser.add_argument("--meshes", nargs="+", default=list(MESHES), choices=list(MESHES))
     parser.add_argument("--scale", action="store_true", help="speed and memory at scale, and Table 1")
+    parser.add_argument("--auto", action="store_true", help="automatic pairs against 100 landmark pairs")
     parser.add_argument("--levels", type=int, default=4, help="--scale: subdivisions of the cow (4: 743k vertices)")
     parser.add_argument("--scale-pairs", type=int, nargs="+", default=[100, 1000, 10000, 100000])
     parser.add_argument("--mesh-pairs", type=int, default=1000, help="--scale: pairs for the mesh-size rows")
@@ -172,6 +206,9 @@ def main(argv=None) -> None:
     warnings.simplefilter("ignore", SymblendWarning)
     if args.scale:
         scale_main(args)
+        return
+    if args.auto:
+        auto_main(args)
         return
 
     header = ["mesh", "scenario", "pairs", "input", "baseline", *MODES, "s local", "s solve", "s warp", "s total"]
