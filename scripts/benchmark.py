@@ -160,17 +160,24 @@ def scale_main(args) -> None:
     table_1()
 
 
+def _table_meshes(title: str, header: list[str], meshes: list[str]):
+    """Print a table's title and header; yield the meshes present, a row for each absent one."""
+    print(title)
+    print("| " + " | ".join(header) + " |")
+    print("|" + "---|" * len(header))
+    for mesh in meshes:
+        if MESHES[mesh].exists():
+            yield mesh
+        else:
+            print(f"| {mesh} | skipped: {MESHES[mesh]} is absent |")
+
+
 def auto_main(args) -> None:
     """Rows for pairs='auto' and 'landmarks+auto' (affine mode) beside 100 landmark pairs."""
     header = ["mesh", "scenario", "input", "100 landmarks", "auto", "landmarks+auto", "auto rounds",
               "s auto", "s landmarks+auto"]
-    print("shape / sym error, % of the diagonal (lower is better); affine mode")
-    print("| " + " | ".join(header) + " |")
-    print("|" + "---|" * len(header))
-    for mesh in args.meshes:
-        if not MESHES[mesh].exists():
-            print(f"| {mesh} | skipped: {MESHES[mesh]} is absent |")
-            continue
+    for mesh in _table_meshes("shape / sym error, % of the diagonal (lower is better); affine mode", header,
+                              args.meshes):
         points, offset, partner, all_left, all_right = load(MESHES[mesh])
         ms = pymeshlab.MeshSet()
         ms.load_new_mesh(str(MESHES[mesh]))
@@ -212,13 +219,8 @@ def main(argv=None) -> None:
         return
 
     header = ["mesh", "scenario", "pairs", "input", "baseline", *MODES, "s local", "s solve", "s warp", "s total"]
-    print("shape / sym error, % of the diagonal (lower is better); seconds: affine mode, median")
-    print("| " + " | ".join(header) + " |")
-    print("|" + "---|" * len(header))
-    for mesh in args.meshes:
-        if not MESHES[mesh].exists():
-            print(f"| {mesh} | skipped: {MESHES[mesh]} is absent |")
-            continue
+    for mesh in _table_meshes("shape / sym error, % of the diagonal (lower is better); seconds: affine mode, "
+                              "median", header, args.meshes):
         points, offset, partner, all_left, all_right = load(MESHES[mesh])
         for name, deformed, limb in scenarios(points, mesh):
             region = slice(None) if limb is None else np.concatenate([limb, partner[limb]])
