@@ -234,17 +234,17 @@ def symmetrize(points, left=None, right=None, pair_ids=None, midline=None, left_
         if given:
             raise LandmarkError("`pairs='auto'` finds its own pairs and ignores landmarks; to use "
                                 "yours as well, pass pairs='landmarks+auto'.")
-        return auto_symmetrize(points, faces, None, options, progress)
+        return _auto_symmetrize(points, faces, None, options, progress)
     if left is None or right is None:
         raise LandmarkError(f"`pairs='{options['pairs']}'` needs landmark pairs: pass `left` and "
                             "`right` vertex indices, or use pairs='auto'.")
     landmarks = _checked_landmarks(points, left, right, pair_ids, midline, left_weights, right_weights)
     if options["pairs"] == "landmarks+auto":
-        return auto_symmetrize(points, faces, landmarks, options, progress)
+        return _auto_symmetrize(points, faces, landmarks, options, progress)
     return _solve(points, *landmarks, options, progress)
 
 
-def auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: dict,
+def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: dict,
                     progress) -> SymmetrizationResult:
     """The 'auto' and 'landmarks+auto' modes: rounds of (pair on the current output, solve on
     the input) until the mirror correspondence stops changing.
@@ -337,7 +337,8 @@ Parameters
 points : (N, 3) float array
     Vertex coordinates, any unit.
 left, right : (n,) int arrays
-    Vertex indices of the left and right landmark of each pair, n >= 4.
+    Vertex indices of the left and right landmark of each pair, n >= 4
+    (none with ``pairs='auto'``).
 pair_ids : (n,) int array, optional
     Pair labels used in messages (default 1..n).
 midline : (m,) int array, optional
@@ -348,6 +349,9 @@ left_weights, right_weights : (n,) float arrays in [0, 1], optional
 progress : callable(percent: float, message: str), optional
     Called at the start of each stage, as MeshLab filters report progress.
     An exception it raises (or Ctrl-C) stops the run; nothing is changed.
+faces : (F, 3) int array, optional
+    Triangles, used by the automatic pairs (normals, edge length); without
+    them the points are treated as a point cloud.
 {parameters_doc(adapter=False)}
 
 Returns
