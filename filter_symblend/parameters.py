@@ -60,16 +60,14 @@ class Parameter:
             return value
         if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
             raise ParameterError(f"`{self.name}` must be a number, got {value!r}.")
+        if not math.isfinite(float(value)):
+            raise ParameterError(f"`{self.name}` must be finite, got {float(value)!r}.")
         if self.kind == "int":
             if float(value) != int(value):
                 raise ParameterError(f"`{self.name}` must be a whole number, got {value!r}.")
             value = int(value)
-            if value < self.minimum or value > self.maximum:
-                raise ParameterError(f"`{self.name}` must be in {self.range_text()}, got {value!r}.")
-            return value
-        value = float(value)
-        if not math.isfinite(value):
-            raise ParameterError(f"`{self.name}` must be finite, got {value!r}.")
+        else:
+            value = float(value)
         below = value <= self.minimum if self.minimum_open else value < self.minimum
         if below or value > self.maximum:
             raise ParameterError(

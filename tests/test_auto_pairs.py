@@ -133,6 +133,7 @@ def test_a_shape_without_mirror_symmetry_is_refused_with_advice():
     (2.5, r"`auto_pair_count` must be a whole number, got 2.5"),
     (5, r"`auto_pair_count` must be in 10..100000, got 5"),
     ("many", r"`auto_pair_count` must be a number, got 'many'"),
+    (float("inf"), r"`auto_pair_count` must be finite, got inf"),
 ])
 def test_integer_parameters_are_checked(value, message):
     with pytest.raises(ParameterError, match=message):
