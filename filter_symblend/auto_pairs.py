@@ -23,6 +23,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .geometry import MIRROR_X, normalize, proper_rotation_fit, reflection_across_plane
+from .mesh_geometry import farthest_point_order, mean_spacing, vertex_normals
 
 # Acceptance distance, x spacing: twice the median distance from a reflected vertex to its
 # mutual nearest neighbour, within these bounds. On pymeshlab's cow symmetrized from 100
@@ -36,7 +37,6 @@ MATCH_COSINE = 0.7  # the same for grown pairs
 NEIGHBOURS = 12  # paired vertices fitting each local mirror map
 FRONTIER = 3.0  # x spacing: vertices this close to the paired region are tried in a wave
 RIDGE = 0.05  # pull of the local affine map toward the rigid one, x the neighbourhood's spread
-POINT_CLOUD_NORMAL_NEIGHBOURS = 12
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,34 +58,6 @@ class MirrorCorrespondence:
     @property
     def paired_fraction(self) -> float:
         return float(np.mean(self.partner >= 0))
-
-
-def vertex_normals(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, bool]:
-    """Unit normals (N, 3) and whether they are oriented.
-
-    Meshes: area-weighted face normals summed at the vertices (oriented).
-    Point clouds (no faces): the least-spread direction of each point's
-    neighbours (unoriented: compare with ``abs`` of the cosine).
-    """
-    if len(faces):
-        corners = points[faces]
-        face_normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        summed = np.zeros_like(points)
-        for corner in range(3):
-            np.add.at(summed, faces[:, corner], face_normals)
-        return normalize(summed), True
-    _, nearest = cKDTree(points).query(points, k=min(len(points), POINT_CLOUD_NORMAL_NEIGHBOURS))
-    neighbours = points[nearest] - points[nearest].mean(axis=1, keepdims=True)
-    _, vectors = np.linalg.eigh(np.einsum("nki,nkj->nij", neighbours, neighbours))
-    return vectors[:, :, 0], False
-
-
-def mean_spacing(points: np.ndarray, faces: np.ndarray) -> float:
-    """Mean edge length of the mesh, or mean nearest-neighbour distance of a point cloud."""
-    if len(faces):
-        corners = points[faces]
-        return float(np.mean(np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)))
-    return float(cKDTree(points).query(points, k=2)[0][:, 1].mean())
 
 
 def _agreement(mapped_normals: np.ndarray, normals: np.ndarray, oriented: bool) -> np.ndarray:
@@ -203,19 +175,6 @@ def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, p
         side[s], side[t] = np.where(s == t, 0, v), np.where(s == t, 0, -v)
         waves += 1
     return MirrorCorrespondence(partner, side, seeds, waves)
-
-
-def farthest_point_order(points: np.ndarray, count: int) -> np.ndarray:
-    """Indices (count,) into ``points`` (n, 3) by farthest-point sampling from the point nearest
-    the centroid (a start that does not depend on the vertex order)."""
-    start = int(np.argmin(np.linalg.norm(points - points.mean(axis=0), axis=1)))
-    chosen = np.empty(count, dtype=np.int64)
-    chosen[0] = start
-    distance = np.linalg.norm(points - points[start], axis=1)
-    for k in range(1, count):
-        chosen[k] = np.argmax(distance)
-        np.minimum(distance, np.linalg.norm(points - points[chosen[k]], axis=1), out=distance)
-    return chosen
 
 
 def spread_pairs(points: np.ndarray, correspondence: MirrorCorrespondence, count: int,

@@ -13,6 +13,7 @@ from scipy.spatial import cKDTree
 
 from .errors import GeometryError
 from .geometry import reflection_across_plane
+from .mesh_geometry import mean_spacing
 
 CANDIDATE_FACES = 16  # nearest triangle centroids searched per query point
 QUERY_CHUNK = 20000  # queries per batch: bounds memory to about 100 MB
@@ -104,8 +105,7 @@ def fill_from_mirror(points: np.ndarray, faces: np.ndarray, missing: np.ndarray,
                             "Mark only the damaged region as missing.")
     mirrored = reflection_across_plane(points, np.asarray(plane_normal, dtype=float), plane_offset)
     target = closest_points_on_surface(mirrored, faces[intact_faces], points[moved])
-    edges = points[faces] - points[np.roll(faces, 1, axis=1)]
-    ramp = 2.0 * float(np.linalg.norm(edges, axis=2).mean())
+    ramp = 2.0 * mean_spacing(points, faces)
     distance, _ = cKDTree(points[intact_vertex]).query(points[moved])
     t = np.clip(distance / ramp, 0.0, 1.0)
     blend = missing[moved] * t * t * (3.0 - 2.0 * t)

@@ -10,6 +10,7 @@ from scipy.spatial import cKDTree
 
 from .asymmetry import fit_mirror_plane
 from .geometry import normalize, rotation_about_axis, similarity_fit, voxel_grid
+from .mesh_geometry import farthest_point_order
 
 
 def mirror_partners(points: np.ndarray, tolerance: float = 1e-4):
@@ -47,16 +48,6 @@ def _left_candidates(points: np.ndarray, offset: float, partner: np.ndarray, mar
     return np.flatnonzero((partner >= 0) & (points[:, 0] > offset + margin * diagonal))
 
 
-def farthest_point_sample(points: np.ndarray, count: int) -> np.ndarray:
-    """Indices (count,) into ``points`` spread by farthest-point sampling from point 0."""
-    chosen = [0]
-    distance = np.linalg.norm(points - points[0], axis=1)
-    for _ in range(count - 1):
-        chosen.append(int(np.argmax(distance)))
-        distance = np.minimum(distance, np.linalg.norm(points - points[chosen[-1]], axis=1))
-    return np.array(chosen)
-
-
 def farthest_point_pairs(points: np.ndarray, offset: float, partner: np.ndarray, count: int,
                          margin: float = 0.02):
     """``count`` pairs (left (count,), right (count,)) spread over the surface by farthest-point
@@ -64,7 +55,7 @@ def farthest_point_pairs(points: np.ndarray, offset: float, partner: np.ndarray,
     candidates = _left_candidates(points, offset, partner, margin)
     if count > len(candidates):
         raise ValueError(f"Only {len(candidates)} mirror pairs are available, {count} asked.")
-    left = candidates[farthest_point_sample(points[candidates], count)]
+    left = candidates[farthest_point_order(points[candidates], count, start=0)]
     return left, partner[left]
 
 

@@ -1,0 +1,54 @@
+"""Quantities of a mesh (or point cloud) on arrays: vertex normals, mean edge length,
+farthest-point sampling."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .geometry import normalize
+from .neighbourhoods import mean_nearest_spacing
+
+POINT_CLOUD_NORMAL_NEIGHBOURS = 12
+
+
+def vertex_normals(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, bool]:
+    """Unit normals (N, 3) and whether they are oriented.
+
+    Meshes: area-weighted face normals summed at the vertices (oriented).
+    Point clouds (no faces): the least-spread direction of each point's
+    neighbours (unoriented: compare with ``abs`` of the cosine).
+    """
+    if len(faces):
+        corners = points[faces]
+        face_normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        summed = np.zeros_like(points)
+        for corner in range(3):
+            np.add.at(summed, faces[:, corner], face_normals)
+        return normalize(summed), True
+    _, nearest = cKDTree(points).query(points, k=min(len(points), POINT_CLOUD_NORMAL_NEIGHBOURS))
+    neighbours = points[nearest] - points[nearest].mean(axis=1, keepdims=True)
+    _, vectors = np.linalg.eigh(np.einsum("nki,nkj->nij", neighbours, neighbours))
+    return vectors[:, :, 0], False
+
+
+def mean_spacing(points: np.ndarray, faces: np.ndarray) -> float:
+    """Mean edge length of the mesh, or mean nearest-neighbour distance of a point cloud."""
+    if len(faces):
+        corners = points[faces]
+        return float(np.mean(np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)))
+    return mean_nearest_spacing(points)
+
+
+def farthest_point_order(points: np.ndarray, count: int, start: int | None = None) -> np.ndarray:
+    """Indices (count,) into ``points`` (n, 3) by farthest-point sampling from index ``start``
+    (default: the point nearest the centroid, a start that does not depend on the vertex order)."""
+    if start is None:
+        start = int(np.argmin(np.linalg.norm(points - points.mean(axis=0), axis=1)))
+    chosen = np.empty(count, dtype=np.int64)
+    chosen[0] = start
+    distance = np.linalg.norm(points - points[start], axis=1)
+    for k in range(1, count):
+        chosen[k] = np.argmax(distance)
+        np.minimum(distance, np.linalg.norm(points - points[chosen[k]], axis=1), out=distance)
+    return chosen
