@@ -102,7 +102,8 @@ def _local_maps(points, partner, sources, paired_tree, paired):
 
 
 def _predict(points, normals, partner, sources, paired_tree, paired):
-    """Predicted twin position (m, 3), mapped normal (m, 3) and side vote (m,) for ``sources``."""
+    """Predicted twin position (m, 3), mapped normal (m, 3) and the paired vertices the map was
+    fitted on (m, k) for ``sources``."""
     linear, cx, cy, rigid, neighbours = _local_maps(points, partner, sources, paired_tree, paired)
     predicted = np.einsum("nij,nj->ni", linear, points[sources] - cx) + cy
     mapped_normals = np.einsum("nij,nj->ni", rigid, normals[sources])

@@ -177,10 +177,10 @@ def _symmetrize(args) -> int:
 
     params = {p.name: getattr(args, p.name) for p in PARAMETERS}
     automatic = params["pairs"] == "auto"
-    if automatic == bool(args.landmarks):
-        raise SymblendError("Give a landmark file (-l LANDMARKS), or --pairs auto to find pairs on the "
-                            "surface" if not automatic else
-                            "--pairs auto finds its own pairs; leave out -l, or use --pairs landmarks+auto.")
+    if automatic and args.landmarks:
+        raise SymblendError("--pairs auto finds its own pairs; leave out -l, or use --pairs landmarks+auto.")
+    if not automatic and not args.landmarks:
+        raise SymblendError("Give a landmark file (-l LANDMARKS), or --pairs auto to find pairs on the surface.")
     _require_folder(args.output)
     ms = _load_mesh(args.input)
     landmarks = None if automatic else _write_landmarks(ms, args, params)

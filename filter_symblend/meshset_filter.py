@@ -123,9 +123,9 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress) -> SymmetrizationRes
     points, faces = mesh.vertex_matrix(), mesh.face_matrix()
     # The fill works in the input frame, where the asymmetry (distance moved) is measured.
     core["output_frame"] = "input"
-    if options["pairs"] == "auto":  # the landmark attributes are not read
+    automatic = options["pairs"] == "auto"
+    if automatic:  # the landmark attributes are not read
         result = symmetrize(points, progress=progress, faces=faces, **core)
-        left = right = np.zeros(0, dtype=np.int64)
     else:
         names = {name: options[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
         pairs, left_weights, right_weights = read_landmark_attributes(mesh, **names)
@@ -143,9 +143,13 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress) -> SymmetrizationRes
         transform = np.array(report["canonical_from_input"])
         result = dataclasses.replace(result, points=result.points @ transform[:3, :3].T + transform[:3, 3])
         report.update(output_frame="canonical", plane_normal=[1.0, 0.0, 0.0], plane_offset=0.0)
-    before = mirror_asymmetry(points, faces, fit_mirror_plane(points[left], points[right]) if len(left) else None)
-    after = mirror_asymmetry(result.points, faces,
-                             fit_mirror_plane(result.points[left], result.points[right]) if len(left) else None)
+    if automatic:  # the surface plane of the input was fitted by the automatic pairing already
+        surface = report["auto_pairs"]["surface_plane"]
+        before = mirror_asymmetry(points, faces, plane=(np.array(surface["normal"]), surface["offset"]))
+        after = mirror_asymmetry(result.points, faces)
+    else:  # the landmarks' mirror plane is one more starting plane
+        before = mirror_asymmetry(points, faces, fit_mirror_plane(points[left], points[right]))
+        after = mirror_asymmetry(result.points, faces, fit_mirror_plane(result.points[left], result.points[right]))
     report["mirror_asymmetry_before"] = {k: v for k, v in before.items() if k != "per_vertex"}
     report["mirror_asymmetry_after"] = {k: v for k, v in after.items() if k != "per_vertex"}
     return result

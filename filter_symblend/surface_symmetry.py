@@ -63,14 +63,18 @@ def mirror_distances(points: np.ndarray, faces: np.ndarray, normal, offset: floa
     return np.linalg.norm(closest_points_on_surface(mirrored, faces, points) - points, axis=1)
 
 
-def mirror_asymmetry(points: np.ndarray, faces: np.ndarray, initial: MirrorFit | None = None) -> dict:
+def mirror_asymmetry(points: np.ndarray, faces: np.ndarray, initial: MirrorFit | None = None,
+                     plane: tuple[np.ndarray, float] | None = None) -> dict:
     """The surface against its own reflection across its fitted plane.
+
+    ``plane`` (normal (3,), offset): the result of ``fit_surface_mirror_plane(points,
+    initial)`` when it is already known, so it is not fitted again.
 
     Returns ``{"max", "mean", "rms"}`` (mesh units), the same relative to the
     bounding-box diagonal (``*_relative``), the plane (``plane_normal``,
     ``plane_offset``) and ``per_vertex`` (N,) distances.
     """
-    normal, offset = fit_surface_mirror_plane(points, initial)
+    normal, offset = fit_surface_mirror_plane(points, initial) if plane is None else plane
     distances = mirror_distances(points, faces, normal, offset)
     diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
     stats = {"max": float(distances.max()), "mean": float(distances.mean()),

@@ -257,8 +257,10 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
     step = 90.0 / (rounds + (landmarks is not None))
     if landmarks is None:
         _report_progress(progress, 2.0, "fitting the mirror plane")
-        normal, offset = fit_surface_mirror_plane(points)
-        user_left = user_right = user_midline = np.zeros(0, dtype=np.int64)
+        surface_normal, surface_offset = normal, offset = fit_surface_mirror_plane(points)
+        no_index, no_weight = np.zeros(0, dtype=np.int64), np.zeros(0)
+        user_left = user_right = user_ids = user_midline = no_index
+        user_wl = user_wr = no_weight
         current, first_round = points, 5.0
     else:
         user_left, user_right, user_ids, user_midline, user_wl, user_wr = landmarks
@@ -285,10 +287,10 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
         if previous is not None and changed < CONVERGED_CHANGE:
             converged = True
             break
-        ids = np.concatenate([user_ids if landmarks else [], [f"automatic {k}" for k in range(1, len(left) + 1)]])
+        ids = np.concatenate([user_ids, [f"automatic {k}" for k in range(1, len(left) + 1)]])
         priority = options["landmark_priority"]
-        wl = np.concatenate([priority * user_wl, np.ones(len(left))]) if landmarks else np.ones(len(left))
-        wr = np.concatenate([priority * user_wr, np.ones(len(left))]) if landmarks else np.ones(len(left))
+        wl = np.concatenate([priority * user_wl, np.ones(len(left))])
+        wr = np.concatenate([priority * user_wr, np.ones(len(left))])
         result = _solve(points, np.concatenate([user_left, left]), np.concatenate([user_right, right]),
                         ids, np.concatenate([user_midline, midline]), wl, wr, options,
                         _scaled_progress(progress, start, step), warn=False)
@@ -301,6 +303,7 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
                              "midline_count": int(result.report["midline_count"] - len(user_midline)),
                              "rounds": history, "converged": converged}}
     if landmarks is None:
+        report["auto_pairs"]["surface_plane"] = {"normal": surface_normal.tolist(), "offset": surface_offset}
         report.pop("landmark_asymmetry_before")
         report.pop("landmark_asymmetry_after")
     else:

@@ -9,6 +9,7 @@ import pytest
 import filter_symblend  # noqa: F401  (binds the filter)
 from filter_symblend import GeometryError, LandmarkError, ParameterError, SymblendWarning, symmetrize, synthetic
 from filter_symblend.auto_pairs import mirror_correspondence
+from filter_symblend.surface_symmetry import mirror_asymmetry
 
 from conftest import SHARED_DATA
 
@@ -81,6 +82,10 @@ def test_mild_asymmetry_is_more_than_halved_without_landmarks(cow):
                                face_matrix=cow.faces))
     report = ms.generate_symmetrized_mesh(pairs="auto")
     assert report["pair_count"] == 0 and "landmark_asymmetry_before" not in report
+    # the input's asymmetry is measured across the surface plane the pairing started from, as fitted afresh
+    independent = mirror_asymmetry(ms.mesh(report["input_mesh_id"]).vertex_matrix(), cow.faces)
+    assert report["mirror_asymmetry_before"]["plane_normal"] == report["auto_pairs"]["surface_plane"]["normal"]
+    assert report["mirror_asymmetry_before"]["rms"] == pytest.approx(independent["rms"], rel=1e-12)
     assert report["mirror_asymmetry_after"]["rms"] < report["mirror_asymmetry_before"]["rms"] / 2
     assert report["hausdorff_input_output"]["max"] > 0
     assert ms.current_mesh().vertex_number() == len(cow.points)
