@@ -177,8 +177,9 @@ def _symmetrize(args) -> int:
 
     params = {p.name: getattr(args, p.name) for p in PARAMETERS}
     automatic = params["pairs"] == "auto"
-    if automatic and args.landmarks:
-        raise SymblendError("--pairs auto finds its own pairs; leave out -l, or use --pairs landmarks+auto.")
+    if automatic and (args.landmarks or args.missing):
+        raise SymblendError("--pairs auto finds its own pairs; leave out -l and --missing, or use "
+                            "--pairs landmarks+auto.")
     if not automatic and not args.landmarks:
         raise SymblendError("Give a landmark file (-l LANDMARKS), or --pairs auto to find pairs on the surface.")
     _require_folder(args.output)

@@ -220,17 +220,19 @@ def test_symmetrize_with_automatic_pairs_needs_no_landmark_file(tmp_path, cow, c
     assert data["mirror_asymmetry_after"]["rms"] < data["mirror_asymmetry_before"]["rms"] / 2
 
 
-@pytest.mark.parametrize(("pairs", "with_file", "message"), [
-    ("auto", True, "--pairs auto finds its own pairs; leave out -l, or use --pairs landmarks+auto."),
-    ("landmarks", False, "Give a landmark file (-l LANDMARKS), or --pairs auto to find pairs on the surface"),
-    ("landmarks+auto", False, "Give a landmark file (-l LANDMARKS), or --pairs auto"),
+@pytest.mark.parametrize(("pairs", "extra", "message"), [
+    ("auto", ["-l", "LANDMARKS"],
+     "--pairs auto finds its own pairs; leave out -l and --missing, or use --pairs landmarks+auto."),
+    ("auto", ["--missing", "L_1"], "--pairs auto finds its own pairs; leave out -l and --missing"),
+    ("landmarks", [], "Give a landmark file (-l LANDMARKS), or --pairs auto to find pairs on the surface"),
+    ("landmarks+auto", [], "Give a landmark file (-l LANDMARKS), or --pairs auto"),
 ])
 def test_symmetrize_checks_the_landmark_file_against_the_pair_source(tmp_path, bent_cow_files, capsys, pairs,
-                                                                      with_file, message):
+                                                                      extra, message):
     mesh_path, landmark_path, *_ = bent_cow_files
     output = tmp_path / "out.ply"
     arguments = ["symmetrize", str(mesh_path), "--pairs", pairs, "-o", str(output)]
-    assert main(arguments + (["-l", str(landmark_path)] if with_file else [])) == 1
+    assert main(arguments + [str(landmark_path) if word == "LANDMARKS" else word for word in extra]) == 1
     assert message in capsys.readouterr().err and not output.exists()
 
 
