@@ -21,7 +21,7 @@ import pathlib
 import sys
 import warnings
 
-from .errors import SymblendError
+from .errors import SymblendError, SymblendWarning
 from .parameters import DEFAULTS, PARAMETERS
 
 FRAMES = ("LPS", "RAS")
@@ -54,9 +54,27 @@ def _add_landmark_options(parser: argparse.ArgumentParser, required: bool = True
     parser.add_argument("--midline", action="store_true",
                         help="treat landmarks without a partner as midline landmarks (held on the "
                              "symmetry plane); without it they are an error")
+    parser.add_argument("--curves", action="store_true",
+                        help="numbered landmarks (NAME_1, NAME_2, ..., any separator) are curves: each is "
+                             "traced along the surface and resampled into equally spaced semilandmarks; "
+                             "a left curve pairs with the right curve of the same name, a curve without a "
+                             "side word lies on the midline (needs --midline)")
+    parser.add_argument("--curve-spacing", type=_positive_length, metavar="LENGTH",
+                        help="distance between semilandmarks along a curve, in mesh units; "
+                             "default: 1%% of the bounding-box diagonal")
     parser.add_argument("--mesh-frame", choices=FRAMES, default="LPS",
                         help="coordinate system of the mesh, used only when the landmark file states one "
                              "(Slicer files); default: %(default)s, as Slicer saves models")
+
+
+def _positive_length(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0 < value < float("inf"):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a positive length in mesh units")
+    return value
 
 
 def _add_missing_option(parser: argparse.ArgumentParser) -> None:
@@ -86,22 +104,30 @@ def _load_mesh(path: pathlib.Path, ms=None):
 
 
 def _snapped_pairs(ms, args):
+    from .curves import add_curve_pairs, find_curves
     from .landmark_files import read_landmarks
     from .pairing import pair_by_name, read_pair_table, snap_pairs
 
     landmarks, frame_note = read_landmarks(args.landmarks).in_frame(args.mesh_frame)
     names = landmarks.names()
+    left_words, _, right_words = args.side_words.lower().partition("/")
+    if not left_words or not right_words:
+        raise SymblendError(f"--side-words {args.side_words!r}: give LEFT,.../RIGHT,..., e.g. l,left/r,right.")
+    side_words = tuple(left_words.split(",")), tuple(right_words.split(","))
+    curves, singles = find_curves(names, *side_words, args.midline) if args.curves else ([], range(len(names)))
     if args.pair_table:
         index_pairs = read_pair_table(args.pair_table, names)
         paired = {i for pair in index_pairs for i in pair}
-        unpaired = [i for i in range(len(names)) if i not in paired]
+        unpaired = [i for i in singles if i not in paired]
     else:
-        left_words, _, right_words = args.side_words.lower().partition("/")
-        if not left_words or not right_words:
-            raise SymblendError(f"--side-words {args.side_words!r}: give LEFT,.../RIGHT,..., e.g. l,left/r,right.")
-        index_pairs, unpaired = pair_by_name(names, tuple(left_words.split(",")), tuple(right_words.split(",")))
-    snapped = snap_pairs(ms.current_mesh().vertex_matrix(), landmarks, index_pairs, unpaired,
+        index_pairs, unpaired = pair_by_name([names[i] for i in singles], *side_words)
+        index_pairs = [(singles[a], singles[b]) for a, b in index_pairs]
+        unpaired = [singles[i] for i in unpaired]
+    mesh = ms.current_mesh()
+    snapped = snap_pairs(mesh.vertex_matrix(), landmarks, index_pairs, unpaired,
                          midline=args.midline, source=str(args.landmarks))
+    snapped = add_curve_pairs(snapped, mesh.vertex_matrix(), mesh.face_matrix(), landmarks, curves,
+                              args.curve_spacing, str(args.landmarks))
     return snapped, frame_note
 
 
@@ -153,7 +179,8 @@ def _write_landmarks(ms, args, names: dict) -> dict:
     write_landmark_attributes(ms.current_mesh(), snapped.pairs, left_weights, right_weights, names["pair_attribute"],
                               names["midline_attribute"], names["weight_attribute"])
     return {"file": str(args.landmarks), "frame": frame_note, "pairs": [list(p) for p in snapped.pair_names],
-            "midline": snapped.midline_names, "missing": missing,
+            "midline": snapped.midline_names, "curves": snapped.curves,
+            "placed_point_spacing": snapped.placed_spacing, "missing": missing,
             "snap_distance_max": float(snapped.snap_distances.max()), "left_out_unplaced": snapped.unplaced}
 
 
@@ -185,6 +212,8 @@ def _symmetrize(args) -> int:
     _require_folder(args.output)
     ms = _load_mesh(args.input)
     landmarks = None if automatic else _write_landmarks(ms, args, params)
+    if landmarks and landmarks["curves"] and not params["width_spacing"]:
+        params["width_spacing"] = landmarks["placed_point_spacing"]  # semilandmarks leave the widths as they were
     report = generate_symmetrized_mesh(ms, _progress_display(), **params)
     report["landmarks"] = landmarks
     _save_atomically(ms, args.output)
@@ -215,7 +244,12 @@ def _mlx(args) -> int:
     ms = _load_mesh(args.input)
     landmarks = None
     if args.landmarks:
-        landmarks = _write_landmarks(ms, args, ours[0] if ours else DEFAULTS)
+        options = ours[0] if ours else DEFAULTS
+        landmarks = _write_landmarks(ms, args, options)
+        if landmarks["curves"] and not options["width_spacing"]:
+            warnings.warn(f"{args.script} has width_spacing 0, so its widths are multiples of the semilandmark "
+                          f"spacing; set width_spacing to {landmarks['placed_point_spacing']:.4g} (the spacing of "
+                          "the placed points) in the script to keep them as without curves.", SymblendWarning)
     steps = apply_filter_script(ms, args.script, _progress_display())
     _save_atomically(ms, args.output)
     _write_report(args.report, {"script": str(args.script), "landmarks": landmarks, "steps": steps})
@@ -260,6 +294,12 @@ def _check(args) -> int:
               f"{right} -> vertex {snapped.pairs.right[k - 1]} (snap {distance[1]:.3g})")
     if snapped.midline_names:
         print(f"midline: {', '.join(snapped.midline_names)}")
+    for curve in snapped.curves:
+        print(f"curve {curve['name']}{' (midline)' if curve['midline'] else ''}: "
+              f"{'/'.join(map(str, curve['control_points']))} control points, surface length "
+              f"{'/'.join(f'{x:.4g}' for x in curve['surface_length'])}, {curve['samples']} semilandmarks"
+              + (f" ({curve['dropped_on_used_vertices']} dropped on vertices already used)"
+                 if curve['dropped_on_used_vertices'] else ""))
     if snapped.unplaced:
         print(f"left out (not placed): {', '.join(snapped.unplaced)}")
     check_pairs(ms.current_mesh().vertex_matrix(), snapped.pairs)

@@ -26,9 +26,11 @@ LEFT_WORDS = ("l", "left", "lt")
 RIGHT_WORDS = ("r", "right", "rt")
 FAR_FROM_SURFACE = 0.02  # snap distance, as a fraction of the bbox diagonal, that is reported
 _SEPARATORS = re.compile(r"[_\-.\s]+")
+NUMBERED = re.compile(r"[_\-.\s]+(\d+)\s*$")  # "L_zygomatic_arch_3", "OC-12": a curve's point number
 
 
-def _side_and_base(name: str, left_words, right_words):
+def side_and_base(name: str, left_words=LEFT_WORDS, right_words=RIGHT_WORDS):
+    """("left" | "right" | None, the name without its side word, lower case, "_"-joined)."""
     tokens = [t for t in _SEPARATORS.split(name.strip().lower()) if t]
     for side, words in (("left", left_words), ("right", right_words)):
         for position in (0, -1):
@@ -43,7 +45,7 @@ def pair_by_name(names: list[str], left_words=LEFT_WORDS, right_words=RIGHT_WORD
     sides: dict[str, dict[str, int]] = {"left": {}, "right": {}}
     unpaired = []
     for index, name in enumerate(names):
-        side, base = _side_and_base(name, left_words, right_words)
+        side, base = side_and_base(name, left_words, right_words)
         if side is None:
             unpaired.append(index)
             continue
@@ -87,6 +89,20 @@ def read_pair_table(path, names: list[str]):
     return pairs
 
 
+def nearest_vertices(points: np.ndarray, positions: np.ndarray, names: list[str], source: str):
+    """Distances and indices (k,) of the vertices of ``points`` (N, 3) nearest to ``positions``
+    (k, 3), with a warning that names the points farther than FAR_FROM_SURFACE from the surface."""
+    distances, vertices = cKDTree(points).query(positions)
+    diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
+    far = np.flatnonzero(distances > FAR_FROM_SURFACE * diagonal)
+    if far.size:
+        shown = ", ".join(f"{names[i]} ({distances[i]:.3g})" for i in far[:10])
+        warnings.warn(f"{source}: {shown} lie far from the mesh surface (more than "
+                      f"{FAR_FROM_SURFACE:.0%} of the diagonal); check the file's coordinate system "
+                      "(--mesh-frame) and units.", SymblendWarning, stacklevel=3)
+    return distances, vertices
+
+
 @dataclasses.dataclass
 class SnappedPairs:
     """Landmark pairs (and midline landmarks) on mesh vertices, with what was done to get there."""
@@ -96,6 +112,8 @@ class SnappedPairs:
     midline_names: list[str]
     snap_distances: np.ndarray  # (n, 2) for the pairs, mesh units
     unplaced: list[str]
+    curves: list[dict] = dataclasses.field(default_factory=list)  # what each curve became (curves.py)
+    placed_spacing: float | None = None  # with curves: mean nearest spacing of the placed points
 
     def weights(self, missing: list[str]):
         """(left, right) weights (n,): 0 for the landmarks named in ``missing``, 1 elsewhere."""
@@ -119,10 +137,12 @@ def snap_pairs(points: np.ndarray, landmarks: LandmarkSet, index_pairs, unpaired
     names = landmarks.names()
     if unpaired and not midline:
         listed = ", ".join(repr(names[i]) for i in unpaired[:20])
+        numbered = [names[i] for i in unpaired if NUMBERED.search(names[i])]
+        hint = f" If {numbered[0]!r} is a point of a curve, pass --curves." if numbered else ""
         raise LandmarkError(
             f"{source}: {len(unpaired)} landmark(s) have no partner: {listed}. Name them with a side "
-            "(L_/R_ prefix or _left/_right suffix), list them in a pair table (--pairs), or declare "
-            "them midline landmarks (--midline).")
+            "(L_/R_ prefix or _left/_right suffix), list them in a pair table (--pair-table), or declare "
+            f"them midline landmarks (--midline).{hint}")
     placed = [(a, b) for a, b in index_pairs if landmarks.landmarks[a].placed and landmarks.landmarks[b].placed]
     unplaced = [f"{names[a]}/{names[b]}" for a, b in index_pairs if (a, b) not in placed]
     unplaced += [names[i] for i in unpaired if not landmarks.landmarks[i].placed]
@@ -132,20 +152,13 @@ def snap_pairs(points: np.ndarray, landmarks: LandmarkSet, index_pairs, unpaired
                       "are left out.", SymblendWarning, stacklevel=2)
     order = [i for pair in placed for i in pair] + on_plane
     positions = np.array([landmarks.landmarks[i].position for i in order], dtype=float).reshape(-1, 3)
-    distances, vertices = cKDTree(points).query(positions)
+    distances, vertices = nearest_vertices(points, positions, [names[i] for i in order], source)
     sorted_at = np.argsort(vertices, kind="stable")
     same = np.flatnonzero(np.diff(vertices[sorted_at]) == 0)
     if same.size:
         a, b = sorted_at[same[0]], sorted_at[same[0] + 1]
         raise LandmarkError(f"{source}: landmarks {names[order[a]]!r} and {names[order[b]]!r} both snap to "
                             f"vertex {vertices[a]}; move one of them, or use a finer mesh.")
-    diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
-    far = np.flatnonzero(distances > FAR_FROM_SURFACE * diagonal)
-    if far.size:
-        shown = ", ".join(f"{names[order[i]]} ({distances[i]:.3g})" for i in far[:10])
-        warnings.warn(f"{source}: {shown} lie far from the mesh surface (more than "
-                      f"{FAR_FROM_SURFACE:.0%} of the diagonal); check the file's coordinate system "
-                      "(--mesh-frame) and units.", SymblendWarning, stacklevel=2)
     count = 2 * len(placed)
     pair_vertices = vertices[:count].reshape(-1, 2)
     pairs = LandmarkPairs(np.arange(1, len(placed) + 1), pair_vertices[:, 0], pair_vertices[:, 1],

@@ -100,8 +100,8 @@ PARAMETERS: tuple[Parameter, ...] = (
         "phi_width", "float", 5.0, "Global solve width (phi)",
         "Gaussian width h of the weights phi that tie neighbouring pairs together in "
         "the global solve, as a multiple of the mean distance from a landmark to its "
-        "nearest landmark (the paper uses 5). Too large shortens bent models; too "
-        "small disconnects the pairs.",
+        "nearest landmark (the paper uses 5; see `width_spacing`). Too large shortens bent "
+        "models; too small disconnects the pairs.",
         unit="x mean nearest-landmark spacing", minimum=0.5, maximum=1000.0,
     ),
     Parameter(
@@ -109,6 +109,15 @@ PARAMETERS: tuple[Parameter, ...] = (
         "Gaussian width of the neighbourhoods theta used to estimate each local "
         "symmetry in Step 1, as a multiple of the mean nearest-landmark spacing.",
         unit="x mean nearest-landmark spacing", minimum=0.5, maximum=1000.0,
+    ),
+    Parameter(
+        "width_spacing", "float", 0.0, "Width unit",
+        "The length that `phi_width` and `theta_width` multiply, in mesh units. 0: the mean "
+        "distance from a landmark to its nearest landmark (the paper). Set it when landmarks are "
+        "much denser in places, e.g. semilandmarks along curves, which would otherwise shrink "
+        "both widths until the pairs fall apart; `symblend symmetrize --curves` sets it to the "
+        "spacing of the placed points.",
+        unit="mesh units", minimum=0.0, maximum=math.inf,
     ),
     Parameter(
         "alpha", "float", 0.01, "Pair-gap stiffness (alpha)",

@@ -129,7 +129,8 @@ def _solve(points: np.ndarray, left, right, ids, midline, wl, wr, options: dict,
     diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
     centre = landmarks.mean(axis=0)
     p0, q0 = p - centre, q - centre
-    spacing = mean_nearest_spacing(landmarks)
+    measured_spacing = mean_nearest_spacing(landmarks)
+    spacing = options["width_spacing"] or measured_spacing
     phi_h, theta_h = options["phi_width"] * spacing, options["theta_width"] * spacing
     phi = pair_weights(p0, q0, phi_h)
     require_connected(phi, p0, q0, labels, spacing, "phi_width", options["phi_width"])
@@ -185,7 +186,8 @@ def _solve(points: np.ndarray, left, right, ids, midline, wl, wr, options: dict,
         "landmark_asymmetry_after": fit_mirror_plane(warped[left], warped[right]).summary(diagonal),
         "vertex_displacement": _summary(asymmetry),
         "diagonal": diagonal,
-        "mean_landmark_spacing": spacing,
+        "mean_landmark_spacing": measured_spacing,
+        "width_spacing": spacing,
         "phi_width": options["phi_width"],
         "phi_h": phi_h,
         "theta_width": options["theta_width"],

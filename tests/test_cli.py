@@ -301,3 +301,54 @@ def test_report_png_without_matplotlib_says_how_to_install_it(tmp_path, bent_cow
     assert main(["report", str(mesh_path), str(mesh_path), "--png", str(tmp_path / "x.png")]) == 1
     assert "pip install 'filter-symblend[plot]'" in capsys.readouterr().err
     assert not (tmp_path / "x.png").exists()
+
+
+@pytest.fixture()
+def curve_files(tmp_path, bent_cow_files):
+    """The bent cow's first 12 pairs as landmarks, and 3 curves through the next 12 pairs: 4 control
+    points on the left, 3 on the right (the right curves skip their second point)."""
+    mesh_path, _, deformed, left, right = bent_cow_files
+    landmarks = [Landmark(f"{side}_{k}", tuple(deformed[v]))
+                 for k in range(12) for side, v in (("L", left[k]), ("R", right[k]))]
+    for c in range(3):
+        chain = range(12 + 4 * c, 16 + 4 * c)
+        landmarks += [Landmark(f"L_arch{c}_{n}", tuple(deformed[left[k]])) for n, k in enumerate(chain, start=1)]
+        landmarks += [Landmark(f"R_arch{c}-{n}", tuple(deformed[right[k]]))
+                      for n, k in enumerate(chain, start=1) if n != 2]
+    path = tmp_path / "curves.pts"
+    write_landmarks(path, LandmarkSet(landmarks))
+    return mesh_path, path
+
+
+def test_curves_become_semilandmark_pairs(tmp_path, curve_files, capsys):
+    mesh_path, landmark_path = curve_files
+    output, report = tmp_path / "out.ply", tmp_path / "report.json"
+    assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "--curves", "--curve-spacing", "0.05",
+                 "-o", str(output), "--report", str(report)]) == 0
+    data = json.loads(report.read_text())
+    curves = data["landmarks"]["curves"]
+    assert [c["name"] for c in curves] == ["arch0", "arch1", "arch2"]
+    assert all(c["control_points"] == [4, 3] and c["samples"] >= 5 for c in curves)
+    assert data["pair_count"] == 12 + sum(c["samples"] for c in curves)
+    assert data["landmarks"]["pairs"][12] == ["L_arch0:1", "R_arch0:1"]
+    assert data["width_spacing"] == data["landmarks"]["placed_point_spacing"] > data["mean_landmark_spacing"]
+    assert data["landmark_asymmetry_after"]["rms_relative"] < 1e-9
+    assert f"{data['pair_count']} landmark pairs" in capsys.readouterr().out
+    assert main(["landmarks", "check", str(mesh_path), "-l", str(landmark_path), "--curves"]) == 0
+    assert "curve arch1: 4/3 control points, surface length" in capsys.readouterr().out
+
+
+def test_curve_option_errors(tmp_path, curve_files, capsys):
+    mesh_path, landmark_path = curve_files
+    output = tmp_path / "out.ply"
+    assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "-o", str(output)]) == 1
+    assert "'L_arch0_2'" in (error := capsys.readouterr().err) and "is a point of a curve, pass --curves" in error
+    with pytest.raises(SystemExit):
+        main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "--curves", "--curve-spacing", "-1",
+              "-o", str(output)])
+    assert "'-1' is not a positive length in mesh units" in capsys.readouterr().err
+    preset = pathlib.Path(__file__).resolve().parents[1] / "mlx_presets" / "fossil_restoration.mlx"
+    assert main(["mlx", str(preset), str(mesh_path), "-l", str(landmark_path), "--curves", "-o", str(output)]) == 0
+    assert "has width_spacing 0, so its widths are multiples of the semilandmark spacing; set width_spacing to" \
+        in capsys.readouterr().err
+    assert output.exists()
