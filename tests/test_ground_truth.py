@@ -4,6 +4,7 @@ import warnings
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
 from filter_symblend import SymblendWarning, symmetrize, synthetic
 from filter_symblend.baseline import mirror_average
@@ -130,10 +131,16 @@ def test_asymmetry_is_the_distance_moved_in_the_input_frame(cow):
 
 def test_report_holds_the_contracted_fields(cow):
     left, right = cow.landmarks(60)
-    report = quiet_symmetrize(synthetic.bend(cow.points, 1.0), left, right, phi_width=6, theta_width=3).report
+    bent = synthetic.bend(cow.points, 1.0)
+    report = quiet_symmetrize(bent, left, right, phi_width=6, theta_width=3).report
     assert report["pair_count"] == 60
     assert report["phi_h"] == pytest.approx(6 * report["mean_landmark_spacing"])
     assert report["theta_h"] == pytest.approx(3 * report["mean_landmark_spacing"])
+    landmarks = bent[np.concatenate([left, right])]
+    assert report["mean_landmark_spacing"] == pytest.approx(cKDTree(landmarks).query(landmarks, k=2)[0][:, 1].mean())
+    assert report["width_spacing"] == report["mean_landmark_spacing"]
+    given = quiet_symmetrize(bent, left, right, phi_width=6, width_spacing=0.25).report
+    assert given["width_spacing"] == 0.25 and given["phi_h"] == pytest.approx(1.5) and given["theta_h"] == pytest.approx(1.25)
     before, after = report["landmark_asymmetry_before"], report["landmark_asymmetry_after"]
     assert before["max"] > before["rms"] > 1e-3 and after["max"] < 1e-12
     assert before["rms_relative"] == pytest.approx(before["rms"] / report["diagonal"])
