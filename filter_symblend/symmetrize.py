@@ -17,6 +17,7 @@ from .geometry import minimal_rotation, normalize, rigid_fit
 from .global_solve import MINUS_X, global_solve
 from .landmarks import MIN_PAIRS, LandmarkPairs, check_pairs, check_points, midline_labels
 from .local_symmetries import LocalSymmetries, local_symmetries
+from .mesh_geometry import mean_spacing
 from .neighbourhoods import mean_nearest_spacing, pair_weights, require_connected, scaled_weights
 from .parameters import keyword_signature, parameters_doc, validate_parameters
 from .surface_symmetry import fit_surface_mirror_plane
@@ -28,7 +29,8 @@ from .warp import thin_plate_spline_warp
 # above 2 with 60 pairs. Subtler mispairings cannot be told from real deformation.
 POOR_PAIR_MISFIT = 1.5
 SWAPPED_COSINE = -0.5  # a pair whose gap points this far against its local normal looks swapped
-CONVERGED_CHANGE = 1e-3  # automatic pairing has converged when fewer vertices than this change twin
+CONVERGED_CHANGE = 1e-3  # automatic pairing has converged when fewer vertices than this get a new twin
+TWIN_MOVE = 2.0  # a twin farther than this many mean edge lengths from the previous one is new
 
 
 @dataclasses.dataclass(frozen=True)
@@ -270,6 +272,7 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
         current, normal, offset = result.points, result.report["plane_normal"], result.report["plane_offset"]
         first_round = 5.0 + step
     fixed = np.concatenate([user_left, user_right, user_midline])
+    edge_length = mean_spacing(points, faces)
     history, previous, converged = [], None, False
     for round_index in range(rounds):
         start = first_round + round_index * step
@@ -277,16 +280,20 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
         correspondence = mirror_correspondence(current, faces, normal, offset,
                                                (user_left, user_right), user_midline)
         left, right, midline = spread_pairs(current, correspondence, options["auto_pair_count"], fixed)
-        changed = 1.0 if previous is None else float(np.mean(correspondence.partner != previous))
+        partner = correspondence.partner
+        changed = moved = 1.0
+        if previous is not None:
+            changed = float(np.mean(partner != previous))
+            moved = _moved_twins(current, partner, previous, edge_length)
         history.append({"pairs": int(len(left)), "midline": int(len(midline)),
                         "paired_vertices": float(correspondence.paired_fraction),
-                        "changed_vertices": changed, "growth_waves": correspondence.waves})
+                        "changed_vertices": changed, "moved_twins": moved, "growth_waves": correspondence.waves})
         if len(left) + len(user_left) < MIN_PAIRS:
             raise GeometryError(
                 f"Automatic pairing found {len(left)} mirror pair(s) on the surface (round {round_index + 1}); "
                 f"it needs at least {MIN_PAIRS}. The shape may be too far from mirror-symmetric for "
                 "automatic pairs: place a few landmark pairs and use pairs='landmarks+auto'.")
-        if previous is not None and changed < CONVERGED_CHANGE:
+        if moved < CONVERGED_CHANGE:
             converged = True
             break
         ids = np.concatenate([user_ids, [f"automatic {k}" for k in range(1, len(left) + 1)]])
@@ -297,7 +304,7 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
                         ids, np.concatenate([user_midline, midline]), wl, wr, options,
                         _scaled_progress(progress, start, step), warn=False)
         current, normal, offset = result.points, result.report["plane_normal"], result.report["plane_offset"]
-        previous = correspondence.partner
+        previous = partner
     _report_progress(progress, 100.0, "done")
     pair_count = len(user_left)
     report = {**result.report, "pair_count": int(pair_count), "midline_count": int(len(user_midline)),
@@ -315,6 +322,17 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
             result.points[user_left], result.points[user_right]).summary(report["diagonal"])
     report["seconds"] = {**report["seconds"], "total": time.perf_counter() - clock}
     return dataclasses.replace(result, report=report)
+
+
+def _moved_twins(points: np.ndarray, partner: np.ndarray, previous: np.ndarray, edge_length: float) -> float:
+    """Fraction of the vertices, paired in both rounds, whose twin is more than two mean edge
+    lengths from the previous one on ``points`` (N, 3). Twins that hop between neighbouring
+    vertices (scans whose two sides are tessellated differently) and vertices that pass or fail
+    the acceptance test from round to round (measured: 16-19 % on igea, with no effect on the
+    surface) do not keep the rounds going."""
+    both = (partner >= 0) & (previous >= 0)
+    far = np.linalg.norm(points[partner[both]] - points[previous[both]], axis=1) > TWIN_MOVE * edge_length
+    return float(np.count_nonzero(far) / len(partner))
 
 
 def _scaled_progress(progress, start: float, width: float):

@@ -164,3 +164,17 @@ def test_igea_scan_mirror_asymmetry_is_at_least_halved():
     report = ms.generate_symmetrized_mesh(pairs="auto")
     assert report["mirror_asymmetry_after"]["rms"] < report["mirror_asymmetry_before"]["rms"] / 2
     assert report["hausdorff_input_output"]["max"] > 0
+    rounds = report["auto_pairs"]["rounds"]
+    assert report["auto_pairs"]["converged"] and rounds[-1]["moved_twins"] < 1e-3 < rounds[-1]["changed_vertices"]
+
+
+def test_twins_that_hop_to_a_neighbour_or_lose_their_pair_are_not_new():
+    from importlib import import_module
+    moved_twins = import_module("filter_symblend.symmetrize")._moved_twins
+    points = np.column_stack([np.arange(10.0), np.zeros(10), np.zeros(10)])  # a row, edges 1 apart
+    previous = np.array([9, 8, 7, 6, 5, 4, 3, 2, 1, 0])
+    hop = np.array([8, 8, 7, 6, 5, 4, 3, 2, 1, 0])  # vertex 0's twin moves one edge
+    lost = np.array([-1, -1, 7, 6, 5, 4, 3, 2, 1, 0])  # vertices 0 and 1 fail the acceptance test
+    jump = np.array([5, 8, 7, 6, 5, 4, 3, 2, 1, 0])  # vertex 0's twin moves four edges
+    assert moved_twins(points, hop, previous, 1.0) == moved_twins(points, lost, previous, 1.0) == 0.0
+    assert moved_twins(points, jump, previous, 1.0) == 0.1
