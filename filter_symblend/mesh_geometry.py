@@ -47,8 +47,21 @@ def farthest_point_order(points: np.ndarray, count: int, start: int | None = Non
         start = int(np.argmin(np.linalg.norm(points - points.mean(axis=0), axis=1)))
     chosen = np.empty(count, dtype=np.int64)
     chosen[0] = start
-    distance = np.linalg.norm(points - points[start], axis=1)
+    coordinates = np.array(points, dtype=float).T.copy()  # (3, n): contiguous rows are faster to sweep
+    distance, step = np.empty(len(points)), np.empty(len(points))
+
+    def squared_distances(index: int, out: np.ndarray) -> np.ndarray:  # same order as distances
+        np.subtract(coordinates[0], coordinates[0, index], out=out)
+        np.multiply(out, out, out=out)
+        for axis in (1, 2):
+            np.subtract(coordinates[axis], coordinates[axis, index], out=step)
+            np.multiply(step, step, out=step)
+            np.add(out, step, out=out)
+        return out
+
+    squared_distances(start, distance)
+    change = np.empty(len(points))
     for k in range(1, count):
         chosen[k] = np.argmax(distance)
-        np.minimum(distance, np.linalg.norm(points - points[chosen[k]], axis=1), out=distance)
+        np.minimum(distance, squared_distances(chosen[k], change), out=distance)
     return chosen

@@ -21,7 +21,7 @@ from .mesh_geometry import mean_spacing
 from .neighbourhoods import mean_nearest_spacing, pair_weights, require_connected, scaled_weights
 from .parameters import keyword_signature, parameters_doc, validate_parameters
 from .surface_symmetry import fit_surface_mirror_plane
-from .warp import thin_plate_spline_warp
+from .warp import ApproximateThinPlateSpline, thin_plate_spline
 
 # A pair's own mirror misfit, in neighbourhood radii, above which it is reported.
 # Measured on the cow and spot: sound pairs stay below 1.2 under bends, compression
@@ -161,7 +161,9 @@ def _solve(points: np.ndarray, left, right, ids, midline, wl, wr, options: dict,
     _report_progress(progress, 50.0, f"warping {len(points)} vertices")
 
     target = solved @ rotation.T + translation
-    warped = thin_plate_spline_warp(landmarks, target, points)
+    spline = thin_plate_spline(landmarks, target - landmarks)
+    warped = points + spline(points, None if progress is None else
+                             lambda fraction: progress(50.0 + 50.0 * fraction, f"warping {len(points)} vertices"))
     warped[unique] = target
     asymmetry = np.linalg.norm(warped - points, axis=1)
     if options["output_frame"] == "canonical":
@@ -198,6 +200,9 @@ def _solve(points: np.ndarray, left, right, ids, midline, wl, wr, options: dict,
         "local_fit_residual": {"median": float(np.median(local.residuals)),
                                "max": float(local.residuals.max())},
         "local_stretch": {"min": float(local.stretch.min()), "max": float(local.stretch.max())},
+        "warp": (f"thin-plate spline through {spline.coarse_count} of the {len(landmarks)} landmarks plus a "
+                 "Wendland correction, exact at all" if isinstance(spline, ApproximateThinPlateSpline)
+                 else f"exact thin-plate spline through the {len(landmarks)} landmarks"),
         "seconds": {},
     }
     stages = ["neighbourhoods", "local_transforms", "global_solve", "warp"]

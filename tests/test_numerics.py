@@ -3,13 +3,14 @@
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from scipy.interpolate import RBFInterpolator
 from scipy.sparse.csgraph import connected_components
 
 from filter_symblend.geometry import MIRROR_X, minimal_rotation, rotation_about_axis
 from filter_symblend.global_solve import MINUS_X, global_solve
 from filter_symblend.local_symmetries import local_symmetries
 from filter_symblend.neighbourhoods import pair_weights
-from filter_symblend.warp import thin_plate_spline_warp
+from filter_symblend import warp
 
 MODES = ["standard", "affine", "articulated"]
 
@@ -182,14 +183,55 @@ def test_global_solve_reproduces_a_globally_affine_input_exactly():
     np.testing.assert_allclose(np.vstack([r, s]), expected, atol=1e-12)
 
 
-def test_thin_plate_spline_is_exact_at_landmarks_and_reproduces_affine_maps():
+@pytest.mark.parametrize("approximate", [False, True])
+def test_thin_plate_spline_is_exact_at_landmarks_and_reproduces_affine_maps(monkeypatch, approximate):
+    if approximate:
+        monkeypatch.setattr(warp, "EXACT_CENTRES", 50)
+        monkeypatch.setattr(warp, "SUBSET_CENTRES", 40)
     rng = np.random.default_rng(1)
-    source = rng.normal(size=(60, 3))
-    target = source + 0.1 * rng.normal(size=source.shape)
-    np.testing.assert_allclose(thin_plate_spline_warp(source, target, source), target, atol=1e-10)
+    source = rng.normal(size=(200, 3))
+    displacement = 0.1 * rng.normal(size=source.shape)
+    spline = warp.thin_plate_spline(source, displacement)
+    assert isinstance(spline, warp.ApproximateThinPlateSpline) == approximate
+    np.testing.assert_allclose(spline(source), displacement, atol=1e-10)
     a = np.eye(3) + 0.2 * rng.normal(size=(3, 3))
     points = rng.normal(size=(500, 3))
-    np.testing.assert_allclose(thin_plate_spline_warp(source, source @ a.T + 1.5, points), points @ a.T + 1.5, atol=1e-10)
+    affine = warp.thin_plate_spline(source, source @ a.T + 1.5 - source)
+    np.testing.assert_allclose(points + affine(points), points @ a.T + 1.5, atol=1e-10)
+
+
+def test_the_hand_written_spline_equals_scipys_rbf_interpolator():
+    """Blocked evaluation from expanded squared distances, near-landmark vertices re-evaluated:
+    the same values as RBFInterpolator(kernel="linear", degree=1), far from the origin too."""
+    rng = np.random.default_rng(2)
+    centres = 1000.0 + 50.0 * rng.normal(size=(700, 3))
+    values = rng.normal(size=(700, 3))
+    points = np.vstack([1000.0 + 60.0 * rng.normal(size=(3000, 3)), centres[:5] + 1e-9, centres[5:10]])
+    expected = RBFInterpolator(centres, values, kernel="linear", degree=1)(points)
+    progress = []
+    ours = warp.ThinPlateSpline(centres, values)(points, progress.append)
+    np.testing.assert_allclose(ours, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
+    assert progress[-1] == 1.0 and all(b - a >= 0.05 for a, b in zip(progress, progress[1:-1]))
+
+
+def test_the_approximate_spline_stays_close_to_the_exact_one_on_a_smooth_map(monkeypatch):
+    """Many landmarks of a smooth deformation: the approximation (exact spline through a
+    farthest-point subset plus a Wendland correction) is exact at every landmark and within
+    1 % of the displacement of the exact spline everywhere."""
+    monkeypatch.setattr(warp, "EXACT_CENTRES", 500)
+    monkeypatch.setattr(warp, "SUBSET_CENTRES", 300)
+    rng = np.random.default_rng(3)
+    centres = rng.uniform(-1, 1, size=(1200, 3))
+    centres /= np.linalg.norm(centres, axis=1, keepdims=True)  # on the unit sphere, like a surface
+    def bend(x):
+        return np.column_stack([0.3 * np.sin(2 * x[:, 1]), 0.2 * x[:, 0] * x[:, 2], 0.1 * np.cos(3 * x[:, 0])])
+    points = rng.normal(size=(4000, 3))
+    points /= np.linalg.norm(points, axis=1, keepdims=True)
+    approximate = warp.thin_plate_spline(centres, bend(centres))
+    exact = warp.ThinPlateSpline(centres, bend(centres))(points)
+    assert isinstance(approximate, warp.ApproximateThinPlateSpline) and approximate.coarse_count == 300
+    np.testing.assert_allclose(approximate(centres), bend(centres), atol=1e-10)
+    assert np.abs(approximate(points) - exact).max() < 0.01 * np.abs(exact).max()
 
 
 def test_iterative_solve_equals_the_dense_one(monkeypatch):
