@@ -200,8 +200,8 @@ def _solve(points: np.ndarray, left, right, ids, midline, wl, wr, options: dict,
         "local_fit_residual": {"median": float(np.median(local.residuals)),
                                "max": float(local.residuals.max())},
         "local_stretch": {"min": float(local.stretch.min()), "max": float(local.stretch.max())},
-        "warp": (f"thin-plate spline through {spline.coarse_count} of the {len(landmarks)} landmarks plus a "
-                 "Wendland correction, exact at all" if isinstance(spline, ApproximateThinPlateSpline)
+        "warp": (f"thin-plate spline through {spline.coarse_count} of the {len(landmarks)} landmarks plus local "
+                 "splines of its residual on patches, exact at all" if isinstance(spline, ApproximateThinPlateSpline)
                  else f"exact thin-plate spline through the {len(landmarks)} landmarks"),
         "seconds": {},
     }

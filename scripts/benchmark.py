@@ -159,7 +159,7 @@ def scale_meshes(meshes, counts):
                 continue
             result, ours, memory = measured(symmetrize, deformed, left, right, **SCAN_OPTIONS)
             report = result.report
-            method = "approximate" if "Wendland" in report["warp"] else "exact"
+            method = "approximate" if "patches" in report["warp"] else "exact"
             baseline = "out of reach"
             ratio = ""
             if 2 * len(left) <= BASELINE_CENTRES:
@@ -186,7 +186,7 @@ def approximation_against_exact(points, faces, count):
     lengths = [np.linalg.norm(out[edges[:, 0]] - out[edges[:, 1]], axis=1) for out in (exact.points, approximate.points)]
     change = np.abs(lengths[1] - lengths[0]) / lengths[0]
     diagonal = exact.report["diagonal"]
-    print(f"\nApproximate warp ({warp.SUBSET_CENTRES:,} landmarks exact + Wendland correction) against the exact "
+    print(f"\nApproximate warp ({warp.SUBSET_CENTRES:,} landmarks exact + local splines on patches) against the exact "
           f"spline, {len(points):,} vertices, {len(left):,} pairs ({2 * len(left):,} landmarks), as above")
     print("| warp s exact | warp s approximate | max distance / diagonal | edge length change: worst | 99.9 % | median |")
     print("|---|---|---|---|---|---|")

@@ -216,8 +216,8 @@ def test_the_hand_written_spline_equals_scipys_rbf_interpolator():
 
 def test_the_approximate_spline_stays_close_to_the_exact_one_on_a_smooth_map(monkeypatch):
     """Many landmarks of a smooth deformation: the approximation (exact spline through a
-    farthest-point subset plus a Wendland correction) is exact at every landmark and within
-    1 % of the displacement of the exact spline everywhere."""
+    farthest-point subset plus local splines of the residual on patches) is exact at every landmark and within
+    0.1 % of the displacement of the exact spline everywhere."""
     monkeypatch.setattr(warp, "EXACT_CENTRES", 500)
     monkeypatch.setattr(warp, "SUBSET_CENTRES", 300)
     rng = np.random.default_rng(3)
@@ -231,7 +231,7 @@ def test_the_approximate_spline_stays_close_to_the_exact_one_on_a_smooth_map(mon
     exact = warp.ThinPlateSpline(centres, bend(centres))(points)
     assert isinstance(approximate, warp.ApproximateThinPlateSpline) and approximate.coarse_count == 300
     np.testing.assert_allclose(approximate(centres), bend(centres), atol=1e-10)
-    assert np.abs(approximate(points) - exact).max() < 0.01 * np.abs(exact).max()
+    assert np.abs(approximate(points) - exact).max() < 1e-3 * np.abs(exact).max()  # measured 2.8e-5
 
 
 def test_iterative_solve_equals_the_dense_one(monkeypatch):
@@ -264,3 +264,21 @@ def test_a_solve_that_does_not_converge_says_so(monkeypatch):
     monkeypatch.setattr(solve_module, "CG_MAX_ITERATIONS", 2)
     with pytest.raises(GeometryError, match=r"did not converge in 2 iterations; lower `phi_width`"):
         global_solve(phi, p + 0.1, q, local, alpha=0.01)
+
+
+def test_the_approximate_spline_handles_flat_patches(monkeypatch):
+    """Landmarks on the faces of a cube: every correction patch inside a face is planar, where a
+    local spline with an affine part would be singular; the constant part keeps it solvable."""
+    monkeypatch.setattr(warp, "EXACT_CENTRES", 500)
+    monkeypatch.setattr(warp, "SUBSET_CENTRES", 200)
+    rng = np.random.default_rng(5)
+    centres = rng.uniform(-1, 1, size=(1500, 3))
+    axis = rng.integers(0, 3, size=len(centres))
+    centres[np.arange(len(centres)), axis] = rng.choice([-1.0, 1.0], size=len(centres))  # onto a face
+    values = np.column_stack([np.sin(centres[:, 1]), centres[:, 0] * centres[:, 2], np.cos(centres[:, 0])])
+    approximate = warp.thin_plate_spline(centres, values)
+    np.testing.assert_allclose(approximate(centres), values, atol=1e-9)
+    points = rng.uniform(-1, 1, size=(2000, 3))
+    exact = warp.ThinPlateSpline(centres, values)(points)
+    assert np.isfinite(approximate(points)).all()
+    assert np.abs(approximate(points) - exact).max() < 0.03 * np.abs(exact).max()  # measured 0.013 (inside the cube)
