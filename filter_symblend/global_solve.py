@@ -31,8 +31,8 @@ per-edge targets reduce to sparse products of the weight matrices with
 per-pair vectors and 3x3 matrices, so nothing of size (number of edges, 3) is
 formed. The x matrix is positive definite for alpha > 0; midline landmarks
 (on_plane) have x = 0 fixed and their rows removed. The y, z matrix is a graph
-Laplacian whose null space (translation) is pinned by fixing pair 0 and then
-moving the solution to zero mean. The solver is chosen by size (see
+Laplacian whose null space (translation) is pinned by a penalty on pair 0 (exact,
+see the code) and then moved to zero mean. The solver is chosen by size (see
 ``_solve_positive_definite``); it starts from the input, which the solution
 differs from by the symmetrizing deformation only.
 """
@@ -47,6 +47,7 @@ from .errors import GeometryError
 from .geometry import minimal_rotation, voxel_grid
 from .local_symmetries import LocalSymmetries
 from .neighbourhoods import scaled_weights
+from .parallel import row_blocks
 
 MINUS_X = np.array([-1.0, 0.0, 0.0])
 
@@ -96,8 +97,8 @@ def _solve_positive_definite(matrix: sp.csr_matrix, rhs: np.ndarray, guess: np.n
     Small or dense systems: dense Cholesky (LAPACK). Large sparse ones: conjugate
     gradients with the two-level preconditioner over the aggregates ``labels``
     (n,), written here because it runs all k right-hand sides in one sparse
-    product per iteration (scipy's cg takes one) and starts from the input
-    geometry. SuperLU was 5x slower at 10^4 pairs (fill-in); pyamg no faster
+    product per iteration (scipy's cg takes one), splits that product over the
+    cores, and starts from the input geometry. SuperLU was 5x slower at 10^4 pairs (fill-in); pyamg no faster
     below 10^5 pairs.
     """
     n = matrix.shape[0]
@@ -105,8 +106,9 @@ def _solve_positive_definite(matrix: sp.csr_matrix, rhs: np.ndarray, guess: np.n
         return cho_solve(cho_factor(matrix.toarray(), lower=True, check_finite=False), rhs,
                          check_finite=False)
     precondition = _two_level_preconditioner(matrix, labels)
+    multiply = row_blocks(matrix)
     x = guess.copy()
-    residual = rhs - matrix @ x
+    residual = rhs - multiply(x)
     scale = np.linalg.norm(rhs, axis=0) + 1e-300
     z = precondition(residual)
     direction = z.copy()
@@ -114,7 +116,7 @@ def _solve_positive_definite(matrix: sp.csr_matrix, rhs: np.ndarray, guess: np.n
     for _ in range(CG_MAX_ITERATIONS):
         if np.all(np.linalg.norm(residual, axis=0) <= CG_TOLERANCE * scale):
             return x
-        product = matrix @ direction
+        product = multiply(direction)
         step = rho / np.einsum("ij,ij->j", direction, product)
         x += step * direction
         residual -= step * product
@@ -139,16 +141,24 @@ def _edge_sums(weights: sp.csr_matrix, a_matrices, origins, ends):
     return row, col
 
 
-def _plus_diagonal(matrix: sp.csr_matrix, diagonal: np.ndarray) -> sp.csr_matrix:
-    """``matrix`` + diag(``diagonal``); phi's pattern always holds the diagonal, so this is in place
-    on a copy (faster than building scipy.sparse.diags)."""
-    out = matrix.copy()
+def _combination(terms: list[tuple[float, sp.csr_matrix]], diagonal: np.ndarray) -> sp.csr_matrix:
+    """sum of c * M over ``terms`` plus diag(``diagonal``), adding the coefficients of a matrix
+    that appears more than once first: without missing landmarks every term is phi, and the
+    result is one scaled copy of it (at 10^5 pairs each extra copy is 350 MB and 0.3 s). phi's
+    pattern always holds the diagonal, so it is set in place."""
+    merged: dict[int, list] = {}
+    for coefficient, matrix in terms:
+        merged.setdefault(id(matrix), [0.0, matrix])[0] += coefficient
+    out = None
+    for coefficient, matrix in merged.values():
+        out = coefficient * matrix if out is None else out + coefficient * matrix
+    out = sp.csr_matrix(out)
     out.setdiag(out.diagonal() + diagonal)
     return out
 
 
-def _laplacian(weights: sp.csr_matrix) -> sp.csr_matrix:
-    return _plus_diagonal(-weights, np.asarray(weights.sum(axis=1)).ravel())
+def _row_sums(matrix: sp.csr_matrix) -> np.ndarray:
+    return np.asarray(matrix.sum(axis=1)).ravel()
 
 
 def global_solve(
@@ -193,18 +203,25 @@ def global_solve(
     rhs_x = (row_a - col_a - row_b + col_b + alpha * (row_c + col_c - row_e - col_e))[:, 0]
     rhs_yz = (row_a - col_a + row_b - col_b + alpha * (row_c - col_c + row_e - col_e))[:, 1:]
 
-    gap_sum = phi_gap + phi_gap_t
-    side_laplacians = 2.0 * (_laplacian(phi_left) + _laplacian(phi_right))
-    x_matrix = side_laplacians + 2.0 * alpha * _plus_diagonal(gap_sum, np.asarray(gap_sum.sum(axis=1)).ravel())
+    # side = 2 L(Phi_p) + 2 L(Phi_q), S = C + C^T; x: side + 2 alpha (diag(S 1) + S); y, z: side + 2 alpha L(S)
+    degrees = 2.0 * (_row_sums(phi_left) + _row_sums(phi_right))
+    gap_degrees = 2.0 * alpha * (_row_sums(phi_gap) + _row_sums(phi_gap_t))
+    sides = [(-2.0, phi_left), (-2.0, phi_right)]
+    x_matrix = _combination([*sides, (2.0 * alpha, phi_gap), (2.0 * alpha, phi_gap_t)], degrees + gap_degrees)
     free = np.ones(n, dtype=bool) if on_plane is None else ~on_plane
     labels = aggregates(0.5 * (left + right)) if n > DENSE_SIZE else np.zeros(n, dtype=np.int64)
     x = np.zeros(n)
-    x[free] = _solve_positive_definite(x_matrix[free][:, free], rhs_x[free, None], left[free, :1],
-                                       labels[free])[:, 0]
-    yz_matrix = sp.csr_matrix(side_laplacians + 2.0 * alpha * _laplacian(gap_sum))
-    yz = np.zeros((n, 2))
-    guess = 0.5 * (left + right)[1:, 1:] - 0.5 * (left + right)[0, 1:]
-    yz[1:] = _solve_positive_definite(yz_matrix[1:, 1:], rhs_yz[1:], guess, labels[1:])
+    if not free.all():
+        x_matrix = x_matrix[free][:, free]
+    x[free] = _solve_positive_definite(x_matrix, rhs_x[free, None], left[free, :1], labels[free])[:, 0]
+    # The y/z rows sum to zero, and so does rhs_yz: adding any lam > 0 at (0, 0) leaves the solution
+    # with y_0 = 0 a solution, and makes the matrix positive definite (no row and column to cut).
+    pin = np.zeros(n)
+    pin[0] = degrees[0]
+    yz_matrix = _combination([*sides, (-2.0 * alpha, phi_gap), (-2.0 * alpha, phi_gap_t)],
+                             degrees + gap_degrees + pin)
+    guess = 0.5 * (left + right)[:, 1:] - 0.5 * (left + right)[0, 1:]
+    yz = _solve_positive_definite(yz_matrix, rhs_yz, guess, labels)
     yz -= yz.mean(axis=0)
 
     r = np.column_stack([x, yz])

