@@ -1,7 +1,7 @@
 """The ``symblend`` command: symmetrize a mesh from a landmark file, run filter scripts, compare
 before and after, check and convert landmarks.
 
-    symblend symmetrize INPUT -l LANDMARKS -o OUTPUT [--pair-table PAIRS.csv] [--report REPORT.json] [filter options]
+    symblend symmetrize INPUT -l LANDMARKS -o OUTPUT [--pair-table PAIRS.csv] [--curves] [--report REPORT.json] [filter options]
     symblend symmetrize INPUT --pairs auto -o OUTPUT [--report REPORT.json] [filter options]
     symblend mlx SCRIPT.mlx INPUT [-l LANDMARKS] -o OUTPUT [--report REPORT.json]
     symblend report BEFORE AFTER [--png PICTURE.png] [--json NUMBERS.json]
@@ -108,6 +108,8 @@ def _snapped_pairs(ms, args):
     from .landmark_files import read_landmarks
     from .pairing import pair_by_name, read_pair_table, snap_pairs
 
+    if args.curve_spacing and not args.curves:
+        raise SymblendError("--curve-spacing spaces the semilandmarks of curves; add --curves, or leave it out.")
     landmarks, frame_note = read_landmarks(args.landmarks).in_frame(args.mesh_frame)
     names = landmarks.names()
     left_words, _, right_words = args.side_words.lower().partition("/")

@@ -98,8 +98,8 @@ def _solve_positive_definite(matrix: sp.csr_matrix, rhs: np.ndarray, guess: np.n
     gradients with the two-level preconditioner over the aggregates ``labels``
     (n,), written here because it runs all k right-hand sides in one sparse
     product per iteration (scipy's cg takes one), splits that product over the
-    cores, and starts from the input geometry. SuperLU was 5x slower at 10^4 pairs (fill-in); pyamg no faster
-    below 10^5 pairs.
+    cores, and starts from the input geometry. SuperLU was 5x slower at 10^4
+    pairs (fill-in); pyamg no faster below 10^5 pairs.
     """
     n = matrix.shape[0]
     if n <= DENSE_SIZE or matrix.nnz > DENSE_FRACTION * n * n:

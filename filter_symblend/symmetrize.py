@@ -29,8 +29,8 @@ from .warp import ApproximateThinPlateSpline, thin_plate_spline
 # above 2 with 60 pairs. Subtler mispairings cannot be told from real deformation.
 POOR_PAIR_MISFIT = 1.5
 SWAPPED_COSINE = -0.5  # a pair whose gap points this far against its local normal looks swapped
-CONVERGED_CHANGE = 1e-3  # automatic pairing has converged when fewer vertices than this get a new twin
-TWIN_MOVE = 2.0  # a twin farther than this many mean edge lengths from the previous one is new
+CONVERGED_CHANGE = 1e-3  # automatic pairing has converged when fewer vertices than this change twin
+TWIN_MOVE = 2.0  # reported: twins that moved farther than this many mean edge lengths
 
 
 @dataclasses.dataclass(frozen=True)
@@ -298,7 +298,7 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
                 f"Automatic pairing found {len(left)} mirror pair(s) on the surface (round {round_index + 1}); "
                 f"it needs at least {MIN_PAIRS}. The shape may be too far from mirror-symmetric for "
                 "automatic pairs: place a few landmark pairs and use pairs='landmarks+auto'.")
-        if moved < CONVERGED_CHANGE:
+        if changed < CONVERGED_CHANGE:
             converged = True
             break
         ids = np.concatenate([user_ids, [f"automatic {k}" for k in range(1, len(left) + 1)]])
@@ -330,11 +330,12 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
 
 
 def _moved_twins(points: np.ndarray, partner: np.ndarray, previous: np.ndarray, edge_length: float) -> float:
-    """Fraction of the vertices, paired in both rounds, whose twin is more than two mean edge
-    lengths from the previous one on ``points`` (N, 3). Twins that hop between neighbouring
-    vertices (scans whose two sides are tessellated differently) and vertices that pass or fail
-    the acceptance test from round to round (measured: 16-19 % on igea, with no effect on the
-    surface) do not keep the rounds going."""
+    """Fraction of the vertices, paired in both rounds, whose twin is more than TWIN_MOVE mean
+    edge lengths from the previous one on ``points`` (N, 3): a report that tells twins hopping
+    between neighbouring vertices (scans whose two sides are tessellated differently) from
+    twins that move. Convergence still counts every change of twin: stopping on this measure
+    stopped the landmarks+auto rounds on the cow too early (symmetry error 0.079 % instead of
+    0.047 % after a 1.2 rad bend), because there small moves still improve the result."""
     both = (partner >= 0) & (previous >= 0)
     far = np.linalg.norm(points[partner[both]] - points[previous[both]], axis=1) > TWIN_MOVE * edge_length
     return float(np.count_nonzero(far) / len(partner))

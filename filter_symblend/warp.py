@@ -7,16 +7,17 @@ kernel="linear" and degree=1, and it reproduces any affine map exactly.
 Fit: the dense (k + 4) system [[-R, P], [P^T, 0]] (R_ij = |c_i - c_j|, P = [1, c]),
 in coordinates centred on the landmarks and scaled by their extent, solved by
 LU with partial pivoting (LAPACK, as RBFInterpolator does; the symmetric-indefinite
-solver was 1.5x slower here).
+solver was no faster here).
 
 Evaluation is written here because it is the filter's hot loop on large meshes:
-vertices go in blocks of about BLOCK_ELEMENTS distances, one block per core at a time, the squared
-distances of a block come from one matrix product [x, 1, |x|^2] @ [-2c; |c|^2; 1]
-(BLAS), then one square root, then one product with the weights.
-Measured 3.4x faster than RBFInterpolator's evaluation at 537k vertices x 4,000
-landmarks on 2 cores, with memory bounded by the blocks. Expanding |x - c|^2 loses digits
-for x within NEAR (of the landmarks' extent) of a landmark, so those vertices are
-evaluated again from coordinate differences (scipy's cdist).
+vertices go in blocks of about BLOCK_ELEMENTS distances, one block per core at a
+time; the squared distances of a block come from one matrix product
+[x, 1, |x|^2] @ [-2c; |c|^2; 1] (BLAS), then one square root, then one product
+with the weights. Measured 3.4x faster than RBFInterpolator's evaluation at 537k
+vertices x 4,000 landmarks on 2 cores, with memory bounded by the blocks.
+Expanding |x - c|^2 loses digits for x within NEAR (of the landmarks' extent) of
+a landmark, so those vertices are evaluated again from coordinate differences
+(scipy's cdist).
 
 Above EXACT_CENTRES landmarks the exact spline is out of reach (its dense system
 grows as k^2 in memory and k^3 in time, its evaluation as k per vertex), so

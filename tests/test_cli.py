@@ -347,6 +347,9 @@ def test_curve_option_errors(tmp_path, curve_files, capsys):
         main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "--curves", "--curve-spacing", "-1",
               "-o", str(output)])
     assert "'-1' is not a positive length in mesh units" in capsys.readouterr().err
+    assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "--curve-spacing", "0.05",
+                 "-o", str(output)]) == 1
+    assert "--curve-spacing spaces the semilandmarks of curves; add --curves" in capsys.readouterr().err
     preset = pathlib.Path(__file__).resolve().parents[1] / "mlx_presets" / "fossil_restoration.mlx"
     assert main(["mlx", str(preset), str(mesh_path), "-l", str(landmark_path), "--curves", "-o", str(output)]) == 0
     assert "has width_spacing 0, so its widths are multiples of the semilandmark spacing; set width_spacing to" \
