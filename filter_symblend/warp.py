@@ -104,8 +104,9 @@ class ThinPlateSpline:
             return end
 
         starts = range(0, len(x), CHUNK_ROWS)
+        threaded = parallel and len(starts) > 1  # one chunk: no pool to start
         reported = 0.0
-        for end in (in_threads(evaluate_chunk, starts) if parallel else map(evaluate_chunk, starts)):
+        for end in (in_threads(evaluate_chunk, starts) if threaded else map(evaluate_chunk, starts)):
             if progress is not None and (end / len(x) >= reported + 0.05 or end == len(x)):
                 reported = end / len(x)
                 progress(reported)
