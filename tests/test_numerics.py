@@ -247,9 +247,12 @@ def test_iterative_solve_equals_the_dense_one(monkeypatch):
     dense = global_solve(phi, p, q, local, alpha=0.01)
     monkeypatch.setattr(solve_module, "DENSE_SIZE", 10)
     monkeypatch.setattr(solve_module, "DENSE_FRACTION", 1.1)
-    iterative = global_solve(phi, p, q, local, alpha=0.01)
+    from threadpoolctl import threadpool_info
+    blas_threads = [library["num_threads"] for library in threadpool_info()]
+    iterative = global_solve(phi, p, q, local, alpha=0.01)  # x and y/z side by side, products in threads
     assert phi.nnz < 0.5 * 300 * 300, "the test must exercise a sparse system"
     np.testing.assert_allclose(iterative[0], dense[0], atol=1e-10)
+    assert [library["num_threads"] for library in threadpool_info()] == blas_threads  # BLAS threads restored
 
 
 def test_a_solve_that_does_not_converge_says_so(monkeypatch):
