@@ -1,6 +1,5 @@
 """Landmark files: round trips for every format, real-world quirks, frames, errors."""
 
-import numpy as np
 import pytest
 
 from filter_symblend.landmark_files import (FORMATS, Landmark, LandmarkFileError, LandmarkSet, read_landmarks,

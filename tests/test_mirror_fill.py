@@ -1,7 +1,6 @@
 """Missing regions take the mirror shape: closest points, the fill, and the hole-filling pipeline."""
 
 import numpy as np
-import pymeshlab
 import pytest
 
 import filter_symblend
