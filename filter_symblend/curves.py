@@ -88,43 +88,34 @@ def add_curve_pairs(snapped: SnappedPairs, points: np.ndarray, faces: np.ndarray
     used = set(np.concatenate([pairs.left, pairs.right, pairs.midline]).tolist())
     placed_vertices = set(used)
     for curve in curves:
-        controls = []
-        for indices in (curve.left, curve.right):
-            if indices is None:
-                controls.append(None)
-                continue
-            placed = [i for i in indices if landmarks.landmarks[i].placed]
-            unplaced += [names[i] for i in indices if i not in placed]
-            controls.append(placed)
-        if any(c is not None and len(c) < 2 for c in controls):
+        sides = [curve.left] if curve.right is None else [curve.left, curve.right]  # one side: midline
+        controls = [[i for i in side if landmarks.landmarks[i].placed] for side in sides]
+        unplaced += [names[i] for side, kept in zip(sides, controls) for i in side if i not in kept]
+        if min(map(len, controls)) < 2:
             warnings.warn(f"{source}: curve {curve.name!r} has fewer than 2 placed points on a side and is "
                           "left out.", SymblendWarning, stacklevel=2)
             continue
-        vertices = [None if c is None else nearest_vertices(
-            points, np.array([landmarks.landmarks[i].position for i in c], dtype=float),
-            [names[i] for i in c], source)[1] for c in controls]
-        placed_vertices.update(np.concatenate([v for v in vertices if v is not None]).tolist())
-        resampled = resample_curve(graph, points, vertices[0], vertices[1], spacing,
-                                   [names[i] for i in controls[0]],
-                                   None if controls[1] is None else [names[i] for i in controls[1]])
-        stems = [None if c is None else NUMBERED.sub("", names[c[0]]) for c in controls]
-        if resampled.right is None:
-            keep = np.array([v not in used for v in resampled.left.tolist()], dtype=bool)
-            midline.append(resampled.left[keep])
+        control_names = [[names[i] for i in side] for side in controls]
+        positions = [np.array([landmarks.landmarks[i].position for i in side], dtype=float) for side in controls]
+        vertices = [nearest_vertices(points, where, side_names, source)[1]
+                    for where, side_names in zip(positions, control_names)]
+        placed_vertices.update(np.concatenate(vertices).tolist())
+        resampled = resample_curve(graph, points, vertices[0], vertices[1] if len(sides) == 2 else None, spacing,
+                                   *control_names)
+        samples = np.array([resampled.left] if resampled.right is None else [resampled.left, resampled.right])
+        keep = ~np.isin(samples, list(used)).any(axis=0) & ((samples[0] != samples[-1]) | (len(samples) == 1))
+        stems = [NUMBERED.sub("", side_names[0]) for side_names in control_names]
+        if len(samples) == 1:
+            midline.append(samples[0, keep])
             midline_names += [f"{stems[0]}:{k}" for k in np.flatnonzero(keep) + 1]
         else:
-            keep = np.array([a not in used and b not in used and a != b
-                             for a, b in zip(resampled.left.tolist(), resampled.right.tolist())], dtype=bool)
-            left.append(resampled.left[keep])
-            right.append(resampled.right[keep])
+            left.append(samples[0, keep])
+            right.append(samples[1, keep])
             pair_names += [(f"{stems[0]}:{k}", f"{stems[1]}:{k}") for k in np.flatnonzero(keep) + 1]
-        used.update(resampled.left[keep].tolist())
-        if resampled.right is not None:
-            used.update(resampled.right[keep].tolist())
-        summaries.append({"name": curve.name, "midline": resampled.right is None,
-                          "control_points": [len(c) for c in controls if c is not None],
-                          "surface_length": [x for x in (resampled.left_length, resampled.right_length)
-                                             if x is not None],
+        used.update(samples[:, keep].ravel().tolist())
+        summaries.append({"name": curve.name, "midline": len(samples) == 1,
+                          "control_points": [len(side) for side in controls],
+                          "surface_length": [resampled.left_length, resampled.right_length][:len(samples)],
                           "samples": int(keep.sum()), "dropped_on_used_vertices": int((~keep).sum())})
     left, right = np.concatenate(left), np.concatenate(right)
     added = len(left) - len(pairs.left)
