@@ -29,15 +29,19 @@ def mean_nearest_spacing(landmarks: np.ndarray) -> float:
 def _pair_distances(left: np.ndarray, right: np.ndarray, radius: float):
     """Index pairs i < j (k,), (k,) with max(|p_i-p_j|, |q_i-q_j|) < radius, and that max."""
     i, j = cKDTree(left).query_pairs(radius, output_type="ndarray").T
-    distance = np.sqrt(np.maximum(_squared_distances(left, i, j), _squared_distances(right, i, j)))
+    distance = _max_side_distance(left, right, i, j)
     keep = distance < radius
     return i[keep], j[keep], distance[keep]
 
 
-def _squared_distances(points: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
-    """|points[i] - points[j]|^2 (k,), by einsum: 4x faster than np.linalg.norm at 10^7 pairs."""
-    difference = points[i] - points[j]
-    return np.einsum("ij,ij->i", difference, difference)
+def _max_side_distance(left: np.ndarray, right: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """max(|p_i - p_j|, |q_i - q_j|) (k,) for index pairs i, j (k,), by einsum on squared
+    lengths: 4x faster than np.linalg.norm at 10^7 pairs."""
+    squared = []
+    for side in (left, right):
+        difference = side[i] - side[j]
+        squared.append(np.einsum("ij,ij->i", difference, difference))
+    return np.sqrt(np.maximum(*squared))
 
 
 def pair_weights(left: np.ndarray, right: np.ndarray, width: float) -> sp.csr_matrix:
@@ -103,10 +107,7 @@ def _connecting_width(left: np.ndarray, right: np.ndarray) -> float:
         _, nearest = cKDTree(stacked).query(stacked, k=k + 1)
         i = np.repeat(np.arange(n), k)
         j = nearest[:, 1:].ravel()
-        distance = np.maximum(
-            np.linalg.norm(left[i] - left[j], axis=1), np.linalg.norm(right[i] - right[j], axis=1)
-        )
-        graph = sp.csr_matrix((distance + 1e-300, (i, j)), shape=(n, n))
+        graph = sp.csr_matrix((_max_side_distance(left, right, i, j) + 1e-300, (i, j)), shape=(n, n))
         if connected_components(graph, directed=False)[0] == 1 or k == n - 1:
             break
         k = min(n - 1, 4 * k)
