@@ -3,6 +3,7 @@ release the GIL, so threads run them in parallel without copying the data."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 from collections.abc import Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
@@ -19,13 +20,11 @@ def in_threads(task: Callable, items: Iterable, limit_blas: bool = True):
     to one thread per call (threadpoolctl) so the threads do not oversubscribe the cores (the
     warp: 1.7x faster on 2 cores than one thread with a multithreaded BLAS, measured); that
     setting is process-wide, so callers that may run concurrently (the sparse products of the
-    global solve, inside ``side_by_side``) leave it off. An exception (Ctrl-C) cancels the items not started."""
+    global solve, inside ``side_by_side``) leave it off. An exception (Ctrl-C) cancels the
+    items not started."""
     pool = ThreadPoolExecutor(WORKERS)
     try:
-        if limit_blas:
-            with threadpool_limits(limits=1, user_api="blas"):
-                yield from pool.map(task, items)
-        else:
+        with threadpool_limits(limits=1, user_api="blas") if limit_blas else contextlib.nullcontext():
             yield from pool.map(task, items)
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
