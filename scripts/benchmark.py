@@ -102,7 +102,7 @@ def subdivided_cows(levels: int):
 
 
 def scale_steps(points, offset, partner, counts):
-    """Steps 1 + 2 per stage against the pair count, on one large mesh (affine mode)."""
+    """Steps 1 + 2 per stage against the pair count, on one large mesh (standard mode)."""
     deformed = synthetic.figure_1_deformation(points)
     print(f"\nSteps 1 + 2 on a bent, compressed cow of {len(points):,} vertices (standard mode; seconds, "
           "peak MB of numpy allocations)")
@@ -142,12 +142,14 @@ def igea_meshes():
         yield name, ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
 
 
-def scan_pairs(points, count):
-    """About ``count`` approximate mirror pairs of a scan, spread by a voxel grid (timing rows only)."""
+def scan_pairs(points, counts):
+    """For each of ``counts``, about that many approximate mirror pairs of a scan, spread by a
+    voxel grid (timing rows only); the mirror partners are found once."""
     offset, partner = synthetic.mirror_partners(points, tolerance=MESH_PAIR_TOLERANCE)
-    left, right = synthetic.spread_pairs(points, offset, partner, count)
-    distinct = left != right  # a vertex near the plane can be its own reflection's nearest vertex
-    return left[distinct], right[distinct]
+    for count in counts:
+        left, right = synthetic.spread_pairs(points, offset, partner, count)
+        distinct = left != right  # a vertex near the plane can be its own reflection's nearest vertex
+        yield count, left[distinct], right[distinct]
 
 
 def scale_meshes(meshes, counts):
@@ -160,8 +162,7 @@ def scale_meshes(meshes, counts):
     print("|---|---|---|---|---|---|---|---|---|---|")
     for name, points, _ in meshes:
         deformed = synthetic.figure_1_deformation(points)
-        for count in counts:
-            left, right = scan_pairs(points, count)
+        for count, left, right in scan_pairs(points, counts):
             if len(left) < 0.9 * count:
                 continue
             result, ours, memory = measured(symmetrize, deformed, left, right, **SCAN_OPTIONS)
@@ -181,7 +182,7 @@ def scale_meshes(meshes, counts):
 
 def approximation_against_exact(points, faces, count):
     """The approximate warp forced where the exact one can still be computed: how far apart they are."""
-    left, right = scan_pairs(points, count)
+    [(_, left, right)] = scan_pairs(points, [count])
     deformed = synthetic.figure_1_deformation(points)
     limit = warp.EXACT_CENTRES
     try:
