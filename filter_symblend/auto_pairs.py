@@ -22,8 +22,11 @@ import dataclasses
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .geometry import MIRROR_X, normalize, proper_rotation_fit, reflection_across_plane
+from .errors import GeometryError
+from .geometry import MIRROR_X, hemisphere_directions, normalize, proper_rotation_fit, reflection_across_plane, whitening
 from .mesh_geometry import farthest_point_order, mean_spacing, vertex_normals
+from .spectral import intrinsic_mirror_map
+from .surface_symmetry import fit_surface_mirror_plane, promising_normals
 
 # Acceptance distance, x spacing: twice the median distance from a reflected vertex to its
 # mutual nearest neighbour, within these bounds. On pymeshlab's cow symmetrized from 100
@@ -36,7 +39,21 @@ SEED_COSINE = 0.9  # normals of a seed pair agree under the reflection at least 
 MATCH_COSINE = 0.7  # the same for grown pairs
 NEIGHBOURS = 12  # paired vertices fitting each local mirror map
 FRONTIER = 3.0  # x spacing: vertices this close to the paired region are tried in a wave
+# x spacing: an intrinsic seed is kept where the local mirror map of its neighbouring seeds
+# predicts its twin this closely. On the cow bent by 1.2 rad, the twins of the eigenfunction
+# map alone are within 2.5 edges for 90 % of the pairs and up to 11 edges off; grown from
+# the seeds kept, 90 % are within 1.1 edges (the rest at the ends of the body).
+SEED_AGREEMENT = 0.5
 RIDGE = 0.05  # pull of the local affine map toward the rigid one, x the neighbourhood's spread
+# Largest mesh for the intrinsic candidate: its eigenproblem takes 11-17 s and about 1 GB
+# at 134k vertices (Igea) and grows faster than linearly.
+INTRINSIC_VERTEX_LIMIT = 300_000
+# Starting planes of the reflection ICP on the whitened shape: the best WHITENED_STARTS of
+# WHITENED_DIRECTIONS spread directions. On the sheared cow (compression 0.6 along (1, 1, 0),
+# shear 0.2) the planes normal to the mapped principal axes end in wrong local minima, and
+# 12 fixed spread directions find the plane in one pose but not in another.
+WHITENED_DIRECTIONS = 200
+WHITENED_STARTS = 6
 
 
 @dataclasses.dataclass(frozen=True)
@@ -84,12 +101,13 @@ def _seed(points, normals, oriented, tree, spacing, plane_normal, plane_offset):
     return partner, side, tolerance
 
 
-def _local_maps(points, partner, sources, paired_tree, paired):
+def _local_maps(points, partner, sources, paired_tree, paired, leave_out=False):
     """Local mirror maps around ``sources`` (m,): (linear (m, 3, 3), centre (m, 3), image centre (m, 3),
-    improper rigid part (m, 3, 3), neighbour indices (m, k)) fitted on the nearest paired vertices."""
-    k = min(NEIGHBOURS, len(paired))
+    improper rigid part (m, 3, 3), neighbour indices (m, k)) fitted on the nearest paired vertices
+    (``leave_out``: sources are paired vertices, each map fitted without the source's own pair)."""
+    k = min(NEIGHBOURS + leave_out, len(paired))
     _, nearest = paired_tree.query(points[sources], k=k)
-    neighbours = paired[nearest.reshape(len(sources), k)]
+    neighbours = paired[nearest.reshape(len(sources), k)[:, int(leave_out):]]
     x, y = points[neighbours], points[partner[neighbours]]
     cx, cy = x.mean(axis=1), y.mean(axis=1)
     x, y = x - cx[:, None], y - cy[:, None]
@@ -101,10 +119,10 @@ def _local_maps(points, partner, sources, paired_tree, paired):
     return linear, cx, cy, rigid, neighbours
 
 
-def _predict(points, normals, partner, sources, paired_tree, paired):
+def _predict(points, normals, partner, sources, paired_tree, paired, leave_out=False):
     """Predicted twin position (m, 3), mapped normal (m, 3) and the paired vertices the map was
     fitted on (m, k) for ``sources``."""
-    linear, cx, cy, rigid, neighbours = _local_maps(points, partner, sources, paired_tree, paired)
+    linear, cx, cy, rigid, neighbours = _local_maps(points, partner, sources, paired_tree, paired, leave_out)
     predicted = np.einsum("nij,nj->ni", linear, points[sources] - cx) + cy
     mapped_normals = np.einsum("nij,nj->ni", rigid, normals[sources])
     return predicted, mapped_normals, neighbours
@@ -112,13 +130,14 @@ def _predict(points, normals, partner, sources, paired_tree, paired):
 
 def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, plane_offset: float,
                           fixed_pairs: tuple[np.ndarray, np.ndarray] | None = None,
-                          fixed_midline: np.ndarray | None = None) -> MirrorCorrespondence:
+                          fixed_midline: np.ndarray | None = None, plane_seeds: bool = True) -> MirrorCorrespondence:
     """Mirror twins of the vertices ``points`` (N, 3) of a mesh (``faces`` (F, 3), may be empty).
 
     ``plane_normal`` (3,), ``plane_offset``: the global mirror plane the seeds come
     from (normal . x = offset; the normal points to the left side). ``fixed_pairs``
     (left (n,), right (n,)) and ``fixed_midline`` (m,): vertex indices of known pairs
-    (the user's landmarks), seeded as given.
+    (the user's landmarks), seeded as given. ``plane_seeds=False``: the fixed pairs are
+    the only seeds (the plane still sets the acceptance distance).
     """
     points = np.asarray(points, dtype=float)
     plane_normal = normalize(np.asarray(plane_normal, dtype=float))
@@ -126,6 +145,8 @@ def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, p
     spacing = mean_spacing(points, faces)
     tree = cKDTree(points)
     partner, side, tolerance = _seed(points, normals, oriented, tree, spacing, plane_normal, plane_offset)
+    if not plane_seeds:
+        partner[:], side[:] = -1, 0
     if fixed_pairs is not None:
         left, right = fixed_pairs
         stale = np.isin(partner, np.concatenate([left, right]))  # vertices seeded onto a landmark
@@ -194,3 +215,69 @@ def spread_pairs(points: np.ndarray, correspondence: MirrorCorrespondence, count
     on_midline = side[candidates] == 0
     left = candidates[~on_midline]
     return left, partner[left], candidates[on_midline]
+
+
+def intrinsic_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal,
+                             plane_offset: float) -> MirrorCorrespondence:
+    """Mirror twins for a bent or articulated mesh: seeds from the intrinsic mirror map
+    (Laplace-Beltrami eigenfunctions, see ``spectral``), kept where the map is its own
+    inverse and agrees with the local mirror map of the neighbouring seeds, then grown
+    as in :func:`mirror_correspondence`. The plane (as there) gives the first guess and
+    tells left from right: a twin lies on the side its partner's gap points from."""
+    points = np.asarray(points, dtype=float)
+    plane_normal = normalize(np.asarray(plane_normal, dtype=float))
+    spacing = mean_spacing(points, faces)
+    initial = cKDTree(points).query(reflection_across_plane(points, plane_normal, plane_offset))[1]
+    sample, twin, round_trip = intrinsic_mirror_map(points, faces, initial)
+    consistent = np.linalg.norm(points[round_trip] - points[sample], axis=1) < spacing
+    sample, twin = sample[consistent], twin[consistent]
+    on_midline = np.linalg.norm(points[twin] - points[sample], axis=1) < spacing
+    leftward = (points[sample] - points[twin]) @ plane_normal > 0
+    pairs = np.column_stack([np.where(leftward, sample, twin), np.where(leftward, twin, sample)])[~on_midline]
+    pairs = np.unique(pairs, axis=0)  # a pair found from both of its ends counts once
+    midline = sample[on_midline]
+    uses = np.bincount(np.concatenate([pairs.ravel(), midline]), minlength=len(points))
+    pairs, midline = pairs[(uses[pairs] == 1).all(axis=1)], midline[uses[midline] == 1]  # no vertex in two
+    left, right = pairs.T
+    partner = np.full(len(points), -1)
+    partner[left], partner[right], partner[midline] = right, left, midline
+    paired = np.flatnonzero(partner >= 0)
+    if len(paired) > NEIGHBOURS:
+        normals, _ = vertex_normals(points, faces)
+        predicted, _, _ = _predict(points, normals, partner, paired, cKDTree(points[paired]), paired,
+                                   leave_out=True)
+        agrees = np.zeros(len(points), dtype=bool)
+        agrees[paired] = np.linalg.norm(predicted - points[partner[paired]], axis=1) < SEED_AGREEMENT * spacing
+        both = agrees[left] & agrees[right]
+        left, right, midline = left[both], right[both], midline[agrees[midline]]
+    return mirror_correspondence(points, faces, plane_normal, plane_offset, (left, right), midline,
+                                 plane_seeds=False)
+
+
+def first_correspondences(points: np.ndarray, faces: np.ndarray, normal: np.ndarray, offset: float):
+    """Candidate mirror correspondences of a shape with no landmarks, for the first round.
+
+    ``normal`` (3,), ``offset``: the surface's best mirror plane. Yields (name,
+    correspondence or the GeometryError that stopped it): 'mirror plane' (right
+    for a shape symmetric up to noise), 'whitened mirror plane' (the same after
+    whitening: right for a uniformly compressed or sheared one) and, for meshes up
+    to ``INTRINSIC_VERTEX_LIMIT`` vertices, 'intrinsic' (bent or articulated ones).
+    """
+    yield "mirror plane", mirror_correspondence(points, faces, normal, offset)
+    matrix = whitening(points)
+    white = (points - points.mean(axis=0)) @ matrix
+    # Whitened, the principal axes say nothing (all variances are 1): start from the most
+    # promising of many directions spread over the half sphere.
+    starts = promising_normals(white, hemisphere_directions(WHITENED_DIRECTIONS), WHITENED_STARTS)
+    white_normal, white_offset = fit_surface_mirror_plane(white, axes=starts)
+    yield "whitened mirror plane", mirror_correspondence(white, faces, white_normal, white_offset)
+    if not len(faces):
+        yield "intrinsic", GeometryError("the intrinsic candidate needs triangles; this is a point cloud")
+    elif len(points) > INTRINSIC_VERTEX_LIMIT:
+        yield "intrinsic", GeometryError(f"skipped: the mesh has {len(points):,} vertices, the intrinsic "
+                                         f"candidate is tried up to {INTRINSIC_VERTEX_LIMIT:,}")
+    else:
+        try:
+            yield "intrinsic", intrinsic_correspondence(points, faces, normal, offset)
+        except GeometryError as error:
+            yield "intrinsic", error

@@ -224,7 +224,7 @@ def _symmetrize(args) -> int:
     if "auto_pairs" in report:
         automatic_pairs = report["auto_pairs"]
         pairs += (f" + {automatic_pairs['pair_count']} automatic pairs ({len(automatic_pairs['rounds'])} rounds, "
-                  f"{'converged' if automatic_pairs['converged'] else 'not converged'})")
+                  f"stopped: {automatic_pairs['stopped']})")
     landmark_line = ""
     if "landmark_asymmetry_before" in report:
         before, after = report["landmark_asymmetry_before"], report["landmark_asymmetry_after"]

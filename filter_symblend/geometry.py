@@ -110,3 +110,26 @@ def voxel_grid(positions: np.ndarray, target: int, steps: int = 20,
 def reflection_across_plane(points: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:
     """Mirror images of ``points`` (n, 3) across the plane {x : normal . x = offset}."""
     return points - 2.0 * (points @ normal - offset)[:, None] * normal
+
+
+def whitening(points: np.ndarray) -> np.ndarray:
+    """Symmetric matrix W (3, 3) such that (points - mean) @ W has identity covariance.
+
+    A mirror-symmetric shape under any affine map has an affine mirror symmetry;
+    whitened, that symmetry is an orthogonal reflection again (the shape's
+    covariance is invariant under its symmetry), so plane-based pairing works on
+    a uniformly compressed or sheared shape.
+    """
+    centred = points - points.mean(axis=0)
+    values, vectors = np.linalg.eigh(centred.T @ centred / len(points))
+    return (vectors / np.sqrt(np.maximum(values, 1e-300 * values.max()))) @ vectors.T
+
+
+def hemisphere_directions(count: int) -> np.ndarray:
+    """``count`` unit vectors (count, 3) spread evenly over the half sphere z >= 0 (a Fibonacci
+    spiral): the distinct normals of planes through a point."""
+    k = np.arange(count) + 0.5
+    z = 1.0 - k / count
+    angle = np.pi * (1.0 + np.sqrt(5.0)) * k
+    ring = np.sqrt(1.0 - z**2)
+    return np.column_stack([ring * np.cos(angle), ring * np.sin(angle), z])

@@ -128,11 +128,13 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter(
         "pairs", "enum", "landmarks", "Pairs",
         "Where the mirror pairs come from. 'landmarks': the pair attribute (the paper). 'auto': "
-        "found on the surface, no landmarks needed: the best mirror plane (reflection ICP from "
-        "several starting planes) seeds a vertex-to-vertex mirror correspondence, which grows "
-        "along the surface with local mirror maps; pairs spread over it are symmetrized, and "
-        "the pairing is repeated on the output until it stops changing. For scans and mildly "
-        "deformed shapes; strongly bent or articulated ones need landmarks. 'landmarks+auto': "
+        "found on the surface, no landmarks needed: a vertex-to-vertex mirror correspondence "
+        "seeded by the best mirror plane, by the plane of the whitened shape (compression, "
+        "shear) or by the intrinsic mirror map of the Laplace-Beltrami eigenfunctions (bends, "
+        "articulation), grown along the surface with local mirror maps; the candidate whose "
+        "output is most mirror-symmetric is kept, and the pairing is repeated on the output "
+        "while that helps. A bend combined with an oblique compression defeats it: use "
+        "landmarks there. 'landmarks+auto': "
         "the landmarks are solved first, then automatic pairs found on that output join them "
         "and the solve is repeated, so the whole surface, not only the landmarks, comes out "
         "symmetric; the landmarks are always kept and weigh `landmark_priority` times more.",
@@ -147,7 +149,8 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter(
         "auto_iterations", "int", 5, "Automatic pairing rounds",
         "Most pairing-and-solve rounds for 'auto' and 'landmarks+auto'; the rounds stop earlier "
-        "when fewer than 0.1 % of the vertices change twin.",
+        "when fewer than 0.1 % of the vertices change twin, or when a round leaves the output "
+        "less mirror-symmetric (that round is not kept).",
         minimum=1, maximum=50,
     ),
     Parameter(

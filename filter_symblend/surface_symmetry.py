@@ -19,6 +19,7 @@ from .mirror_fill import closest_points_on_surface
 ICP_SAMPLES = 20000  # vertices used to fit the plane
 ICP_ITERATIONS = 40
 TRIM_FRACTION = 0.8  # correspondences kept per ICP step: the closest 80 %
+SCREEN_SAMPLES = 2000  # vertices used to screen starting planes
 
 
 def _refine_plane(points: np.ndarray, tree: cKDTree, normal: np.ndarray, offset: float):
@@ -37,22 +38,40 @@ def _refine_plane(points: np.ndarray, tree: cKDTree, normal: np.ndarray, offset:
     return normal, offset, float(np.sqrt(np.mean(trimmed**2)))
 
 
-def fit_surface_mirror_plane(points: np.ndarray, initial: MirrorFit | None = None) -> tuple[np.ndarray, float]:
+def fit_surface_mirror_plane(points: np.ndarray, initial: MirrorFit | None = None,
+                             axes: np.ndarray | None = None) -> tuple[np.ndarray, float]:
     """Best mirror plane ``(normal (3,), offset)`` of a point set (N, 3): normal . x = offset.
 
-    Starts from the three principal planes through the centroid (and from
-    ``initial``, e.g. the landmarks' plane), refines each by trimmed reflection
-    ICP on at most ``ICP_SAMPLES`` evenly strided vertices, keeps the best.
+    Starts from the three planes through the centroid normal to ``axes`` (3, 3)
+    (rows; default the principal axes), and from ``initial`` (e.g. the
+    landmarks' plane), refines each by trimmed reflection ICP on at most
+    ``ICP_SAMPLES`` evenly strided vertices, keeps the best.
     """
     sample = points[:: max(1, len(points) // ICP_SAMPLES)]
     centre = sample.mean(axis=0)
-    _, _, axes = np.linalg.svd(sample - centre, full_matrices=False)
+    if axes is None:
+        _, _, axes = np.linalg.svd(sample - centre, full_matrices=False)
+    axes = normalize(np.asarray(axes, dtype=float))
     starts = [(axis, float(axis @ centre)) for axis in axes]
     if initial is not None:
         starts.insert(0, (normalize(initial.normal), initial.offset))
     tree = cKDTree(sample)
     best = min((_refine_plane(sample, tree, n, d) for n, d in starts), key=lambda fit: fit[2])
     return best[0], best[1]
+
+
+def promising_normals(points: np.ndarray, normals: np.ndarray, keep: int) -> np.ndarray:
+    """The ``keep`` rows of ``normals`` (n, 3) whose planes through the centroid reflect a sample of
+    ``points`` (N, 3) closest onto itself (trimmed RMS, one nearest-neighbour query each): cheap
+    starts for :func:`fit_surface_mirror_plane` when the principal axes say nothing."""
+    sample = points[:: max(1, len(points) // SCREEN_SAMPLES)]
+    centre = sample.mean(axis=0)
+    tree = cKDTree(sample)
+    scores = []
+    for normal in normals:
+        distance, _ = tree.query(reflection_across_plane(sample, normal, float(normal @ centre)))
+        scores.append(np.quantile(distance, TRIM_FRACTION))
+    return normals[np.argsort(scores)[:keep]]
 
 
 def mirror_distances(points: np.ndarray, faces: np.ndarray, normal, offset: float) -> np.ndarray:

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from .asymmetry import fit_mirror_plane
-from .auto_pairs import mirror_correspondence, spread_pairs
+from .auto_pairs import first_correspondences, mirror_correspondence, spread_pairs
 from .errors import GeometryError, LandmarkError, SymblendWarning, id_list
 from .geometry import minimal_rotation, normalize, rigid_fit
 from .global_solve import MINUS_X, global_solve
@@ -20,7 +20,7 @@ from .local_symmetries import LocalSymmetries, local_symmetries
 from .mesh_geometry import mean_spacing
 from .neighbourhoods import mean_nearest_spacing, pair_weights, require_connected, scaled_weights
 from .parameters import keyword_signature, parameters_doc, validate_parameters
-from .surface_symmetry import fit_surface_mirror_plane
+from .surface_symmetry import fit_surface_mirror_plane, mirror_distances
 from .warp import ApproximateThinPlateSpline, thin_plate_spline
 
 # A pair's own mirror misfit, in neighbourhood radii, above which it is reported.
@@ -30,6 +30,16 @@ from .warp import ApproximateThinPlateSpline, thin_plate_spline
 POOR_PAIR_MISFIT = 1.5
 SWAPPED_COSINE = -0.5  # a pair whose gap points this far against its local normal looks swapped
 CONVERGED_CHANGE = 1e-3  # automatic pairing has converged when fewer vertices than this change twin
+# Pairs from automatic candidates whose median local fit residual (Step 1, relative to the
+# neighbourhood radius) exceeds this are not mirror pairs. Measured on the cow and spot
+# (symmetric, bent, articulated, sheared; each candidate): 0-0.13 where the pairs are
+# sound or only slid along the surface, 0.6-0.8 where they are garbage (Figure 1 map), and
+# 0.19 for a plane through a random Gaussian cloud.
+SOUND_LOCAL_FIT = 0.15
+# A candidate that pairs this fraction of the vertices is taken without trying the others:
+# one plane pairs 97-100 % of the exactly symmetric cow and spot, 93 % of spot with one
+# leg swung (where the intrinsic candidate is right), at most 84 % of other deformed ones.
+GLOBALLY_SYMMETRIC = 0.95
 TWIN_MOVE = 2.0  # reported: twins that moved farther than this many mean edge lengths
 
 
@@ -256,77 +266,144 @@ def symmetrize(points, left=None, right=None, pair_ids=None, midline=None, left_
 def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: dict,
                     progress) -> SymmetrizationResult:
     """The 'auto' and 'landmarks+auto' modes: rounds of (pair on the current output, solve on
-    the input) until the mirror correspondence stops changing.
+    the input), each kept only if its output is more mirror-symmetric as a surface (RMS
+    distance of the vertices to the reflected output, :func:`mirror_distances`), until the
+    mirror correspondence stops changing or a round no longer helps.
 
     ``landmarks``: None, or the checked (left, right, ids, midline, wl, wr) of the user's pairs,
-    solved alone first and always kept, weighted ``landmark_priority`` times more.
+    solved alone first and always kept, weighted ``landmark_priority`` times more. Without
+    landmarks the first round tries every candidate of :func:`first_correspondences` and
+    keeps the most symmetric output.
     """
     clock = time.perf_counter()
     rounds = options["auto_iterations"]
-    step = 90.0 / (rounds + (landmarks is not None))
-    if landmarks is None:
-        _report_progress(progress, 2.0, "fitting the mirror plane")
-        surface_normal, surface_offset = normal, offset = fit_surface_mirror_plane(points)
-        no_index, no_weight = np.zeros(0, dtype=np.int64), np.zeros(0)
-        user_left = user_right = user_ids = user_midline = no_index
-        user_wl = user_wr = no_weight
-        current, first_round = points, 5.0
-    else:
-        user_left, user_right, user_ids, user_midline, user_wl, user_wr = landmarks
-        result = _solve(points, *landmarks, options, _scaled_progress(progress, 5.0, step))
-        current, normal, offset = result.points, result.report["plane_normal"], result.report["plane_offset"]
-        first_round = 5.0 + step
-    fixed = np.concatenate([user_left, user_right, user_midline])
+    step = 90.0 / (rounds + 2)
+    no_index, no_weight = np.zeros(0, dtype=np.int64), np.zeros(0)
+    user = (no_index, no_index, no_index, no_index, no_weight, no_weight) if landmarks is None else landmarks
+    fixed = np.concatenate([user[0], user[1], user[3]])
     edge_length = mean_spacing(points, faces)
-    history, previous, converged = [], None, False
-    for round_index in range(rounds):
-        start = first_round + round_index * step
-        _report_progress(progress, start, f"automatic pairs, round {round_index + 1}")
-        correspondence = mirror_correspondence(current, faces, normal, offset,
-                                               (user_left, user_right), user_midline)
-        left, right, midline = spread_pairs(current, correspondence, options["auto_pair_count"], fixed)
-        partner = correspondence.partner
-        changed = moved = 1.0
-        if previous is not None:
-            changed = float(np.mean(partner != previous))
-            moved = _moved_twins(current, partner, previous, edge_length)
-        history.append({"pairs": int(len(left)), "midline": int(len(midline)),
-                        "paired_vertices": float(correspondence.paired_fraction),
-                        "changed_vertices": changed, "moved_twins": moved, "growth_waves": correspondence.waves})
-        if len(left) + len(user_left) < MIN_PAIRS:
+
+    def solved(correspondence, paired_on, start, width):
+        """The solve on the input with pairs spread over ``paired_on``, the points they were found on."""
+        left, right, midline = spread_pairs(paired_on, correspondence, options["auto_pair_count"], fixed)
+        if len(left) + len(user[0]) < MIN_PAIRS:
             raise GeometryError(
-                f"Automatic pairing found {len(left)} mirror pair(s) on the surface (round {round_index + 1}); "
-                f"it needs at least {MIN_PAIRS}. The shape may be too far from mirror-symmetric for "
-                "automatic pairs: place a few landmark pairs and use pairs='landmarks+auto'.")
-        if changed < CONVERGED_CHANGE:
-            converged = True
-            break
-        ids = np.concatenate([user_ids, [f"automatic {k}" for k in range(1, len(left) + 1)]])
-        priority = options["landmark_priority"]
-        wl = np.concatenate([priority * user_wl, np.ones(len(left))])
-        wr = np.concatenate([priority * user_wr, np.ones(len(left))])
-        result = _solve(points, np.concatenate([user_left, left]), np.concatenate([user_right, right]),
-                        ids, np.concatenate([user_midline, midline]), wl, wr, options,
-                        _scaled_progress(progress, start, step), warn=False)
-        current, normal, offset = result.points, result.report["plane_normal"], result.report["plane_offset"]
-        previous = partner
-    _report_progress(progress, 100.0, "done")
-    pair_count = len(user_left)
-    report = {**result.report, "pair_count": int(pair_count), "midline_count": int(len(user_midline)),
-              "auto_pairs": {"pair_count": int(result.report["pair_count"] - pair_count),
-                             "midline_count": int(result.report["midline_count"] - len(user_midline)),
-                             "rounds": history, "converged": converged}}
+                f"Automatic pairing found {len(left)} mirror pair(s) on the surface; it needs at least "
+                f"{MIN_PAIRS}. The shape may be too far from mirror-symmetric for automatic pairs: place "
+                "a few landmark pairs and use pairs='landmarks+auto'.")
+        result = _solve_with_automatic_pairs(points, user, left, right, midline, options,
+                                             _scaled_progress(progress, start, width))
+        entry = {"pairs": int(len(left)), "midline": int(len(midline)),
+                 "paired_vertices": float(correspondence.paired_fraction),
+                 "growth_waves": correspondence.waves, "surface_asymmetry": _surface_asymmetry(result, faces),
+                 "local_fit_residual": result.report["local_fit_residual"]["median"]}
+        return result, entry
+
+    history, candidates = [], {}
     if landmarks is None:
-        report["auto_pairs"]["surface_plane"] = {"normal": surface_normal.tolist(), "offset": surface_offset}
+        _report_progress(progress, 2.0, "fitting the mirror plane and first pairs")
+        surface_plane = fit_surface_mirror_plane(points)
+        best = None
+        for index, (name, correspondence) in enumerate(first_correspondences(points, faces, *surface_plane)):
+            try:
+                if isinstance(correspondence, GeometryError):
+                    raise correspondence
+                result, entry = solved(correspondence, points, 5.0 + index * step, step)
+            except GeometryError as error:
+                candidates[name] = str(error)
+                continue
+            if entry["local_fit_residual"] > SOUND_LOCAL_FIT:
+                candidates[name] = (f"rejected: its pairs are not locally mirror-symmetric (median local fit "
+                                    f"residual {entry['local_fit_residual']:.2f} > {SOUND_LOCAL_FIT})")
+                continue
+            candidates[name] = {key: entry[key] for key in ("surface_asymmetry", "local_fit_residual",
+                                                            "paired_vertices")}
+            at_once = entry["paired_vertices"] >= GLOBALLY_SYMMETRIC
+            if at_once or best is None or entry["surface_asymmetry"] < best[1]["surface_asymmetry"]:
+                best = result, {**entry, "first_pairs": name}, correspondence.partner
+            if at_once:
+                break
+        if best is None:
+            raise GeometryError(
+                "Automatic pairing found no usable mirror pairs ("
+                + "; ".join(f"{name}: {reason}" for name, reason in candidates.items())
+                + "). The shape may be too far from mirror-symmetric for automatic pairs: place a few "
+                "landmark pairs and use pairs='landmarks+auto'.")
+        result, entry, previous = best
+        first_round, slots = 1, 2
+    else:
+        result = _solve(points, *landmarks, options, _scaled_progress(progress, 5.0, step))
+        entry, previous = {"landmarks_only": True, "surface_asymmetry": _surface_asymmetry(result, faces)}, None
+        first_round, slots = 0, 1
+    history.append(entry)
+    stopped = "round limit"
+    for round_index in range(first_round, rounds):
+        start = 5.0 + (round_index + slots) * step
+        _report_progress(progress, start, f"automatic pairs, round {round_index + 1}")
+        current = result.points
+        correspondence = mirror_correspondence(current, faces, np.asarray(result.report["plane_normal"]),
+                                               result.report["plane_offset"], (user[0], user[1]), user[3])
+        partner = correspondence.partner
+        change = {} if previous is None else {
+            "changed_vertices": float(np.mean(partner != previous)),
+            "moved_twins": _moved_twins(current, partner, previous, edge_length)}
+        if change and change["changed_vertices"] < CONVERGED_CHANGE:
+            history.append({"paired_vertices": float(correspondence.paired_fraction), **change})
+            stopped = "pairs unchanged"
+            break
+        try:
+            candidate, entry = solved(correspondence, current, start, step)
+        except GeometryError as error:  # too few pairs, or pairs that fall apart: keep the last result
+            history.append({"paired_vertices": float(correspondence.paired_fraction), **change,
+                            "kept": False, "failed": str(error)})
+            stopped = "round failed"
+            break
+        entry.update(change)
+        history.append(entry)
+        if entry["surface_asymmetry"] >= history[-2]["surface_asymmetry"]:
+            entry["kept"] = False
+            stopped = "no gain"
+            break
+        result, previous = candidate, partner
+    _report_progress(progress, 100.0, "done")
+    pair_count = len(user[0])
+    report = {**result.report, "pair_count": int(pair_count), "midline_count": int(len(user[3])),
+              "auto_pairs": {"pair_count": int(result.report["pair_count"] - pair_count),
+                             "midline_count": int(result.report["midline_count"] - len(user[3])),
+                             "rounds": history, "converged": stopped in ("pairs unchanged", "no gain"),
+                             "stopped": stopped}}
+    if landmarks is None:
+        report["auto_pairs"]["first_candidates"] = candidates
+        report["auto_pairs"]["surface_plane"] = {"normal": surface_plane[0].tolist(), "offset": surface_plane[1]}
         report.pop("landmark_asymmetry_before")
         report.pop("landmark_asymmetry_after")
     else:
-        report["landmark_asymmetry_before"] = fit_mirror_plane(points[user_left], points[user_right]).summary(
+        report["landmark_asymmetry_before"] = fit_mirror_plane(points[user[0]], points[user[1]]).summary(
             report["diagonal"])
         report["landmark_asymmetry_after"] = fit_mirror_plane(
-            result.points[user_left], result.points[user_right]).summary(report["diagonal"])
+            result.points[user[0]], result.points[user[1]]).summary(report["diagonal"])
     report["seconds"] = {**report["seconds"], "total": time.perf_counter() - clock}
     return dataclasses.replace(result, report=report)
+
+
+def _surface_asymmetry(result: SymmetrizationResult, faces: np.ndarray) -> float:
+    """RMS distance of the output's vertices to its reflection across its plane, / the diagonal."""
+    distances = mirror_distances(result.points, faces, np.asarray(result.report["plane_normal"]),
+                                 result.report["plane_offset"])
+    return float(np.sqrt(np.mean(distances**2)) / result.report["diagonal"])
+
+
+def _solve_with_automatic_pairs(points, user, left, right, midline, options, progress) -> SymmetrizationResult:
+    """The solve on the user's checked landmarks ``user`` (left, right, ids, midline, wl, wr),
+    weighted ``landmark_priority`` times more, plus automatic pairs ``left``, ``right`` (n,)
+    and ``midline`` (m,) of weight 1."""
+    user_left, user_right, user_ids, user_midline, user_wl, user_wr = user
+    ids = np.concatenate([user_ids, [f"automatic {k}" for k in range(1, len(left) + 1)]])
+    priority = options["landmark_priority"]
+    wl = np.concatenate([priority * user_wl, np.ones(len(left))])
+    wr = np.concatenate([priority * user_wr, np.ones(len(left))])
+    return _solve(points, np.concatenate([user_left, left]), np.concatenate([user_right, right]), ids,
+                  np.concatenate([user_midline, midline]), wl, wr, options, progress, warn=False)
 
 
 def _moved_twins(points: np.ndarray, partner: np.ndarray, previous: np.ndarray, edge_length: float) -> float:

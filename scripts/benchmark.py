@@ -12,7 +12,7 @@ Seconds are the filter's own stage timings (median of --repeat runs).
 
     python scripts/benchmark.py [--pairs 100 300 1000] [--repeat 3] [--meshes cow spot]
     python scripts/benchmark.py --scale      # speed and memory at scale, and the paper's Table 1
-    python scripts/benchmark.py --auto       # automatic pairs against 100 landmark pairs
+    python scripts/benchmark.py --auto       # automatic pairs against 100 landmark pairs; on the Igea scan
 """
 
 from __future__ import annotations
@@ -27,10 +27,11 @@ import warnings
 import numpy as np
 import pymeshlab
 
-from filter_symblend import SymblendWarning, symmetrize, synthetic, warp
+from filter_symblend import GeometryError, SymblendWarning, symmetrize, synthetic, warp
 from filter_symblend.baseline import mirror_average
 from filter_symblend.global_solve import global_solve
 from filter_symblend.local_symmetries import local_symmetries
+from filter_symblend.surface_symmetry import mirror_asymmetry
 from filter_symblend.neighbourhoods import mean_nearest_spacing, pair_weights, require_connected
 
 MESHES = {
@@ -252,7 +253,7 @@ def _table_meshes(title: str, header: list[str], meshes: list[str]):
 
 def auto_main(args) -> None:
     """Rows for pairs='auto' and 'landmarks+auto' (affine mode) beside 100 landmark pairs."""
-    header = ["mesh", "scenario", "input", "100 landmarks", "auto", "landmarks+auto", "auto rounds",
+    header = ["mesh", "scenario", "input", "100 landmarks", "auto", "landmarks+auto", "auto first pairs", "auto rounds",
               "s auto", "s landmarks+auto"]
     for mesh in _table_meshes("shape / sym error, % of the diagonal (lower is better); affine mode", header,
                               args.meshes):
@@ -266,15 +267,45 @@ def auto_main(args) -> None:
         for name, deformed, limb in cases:
             region = slice(None) if limb is None else np.concatenate([limb, partner[limb]])
             deformed = synthetic.random_rigid(deformed, seed=7)
-            automatic = symmetrize(deformed, faces=faces, pairs="auto", mode="affine")
+            try:
+                automatic = symmetrize(deformed, faces=faces, pairs="auto", mode="affine")
+            except GeometryError:
+                automatic = None  # refused: no candidate's pairs are locally mirror-symmetric
             hybrid = symmetrize(deformed, left, right, faces=faces, pairs="landmarks+auto", mode="affine")
-            cells = [errors(out, points, all_left, all_right, region) for out in
-                     (deformed, symmetrize(deformed, left, right, mode="affine").points, automatic.points,
-                      hybrid.points)]
-            rounds = automatic.report["auto_pairs"]
-            cells += [f"{len(rounds['rounds'])}{'' if rounds['converged'] else ' (not converged)'}",
-                      f"{automatic.report['seconds']['total']:.2f}", f"{hybrid.report['seconds']['total']:.2f}"]
+            landmarks = symmetrize(deformed, left, right, mode="affine")
+            cells = [errors(out, points, all_left, all_right, region) if out is not None else "refused"
+                     for out in (deformed, landmarks.points, automatic and automatic.points, hybrid.points)]
+            if automatic is None:
+                cells += ["-", "-", "-"]
+            else:
+                rounds = automatic.report["auto_pairs"]
+                cells += [rounds["rounds"][0]["first_pairs"],
+                          f"{len(rounds['rounds'])} ({rounds['stopped']})",
+                          f"{automatic.report['seconds']['total']:.2f}"]
+            cells.append(f"{hybrid.report['seconds']['total']:.2f}")
             print(f"| {mesh} | {name} | " + " | ".join(cells) + " |", flush=True)
+
+
+def auto_scans() -> None:
+    """pairs='auto' on the Igea scan at three sizes: time, seed source, mirror asymmetry before/after."""
+    if not IGEA.exists():
+        print(f"\npairs='auto' on a scan: skipped, {IGEA} is absent")
+        return
+    print("\npairs='auto' on the Igea scan: mirror asymmetry RMS / max, % of the diagonal")
+    print("| mesh | vertices | seconds | seeds | rounds | before | after |")
+    print("|---|---|---|---|---|---|---|")
+    for name, points, faces in igea_meshes():
+        if name == "igea subdivided":
+            continue
+        result = symmetrize(points, faces=faces, pairs="auto")
+        automatic = result.report["auto_pairs"]
+        plane = automatic["surface_plane"]
+        before = mirror_asymmetry(points, faces, plane=(np.asarray(plane["normal"]), plane["offset"]))
+        after = mirror_asymmetry(result.points, faces)
+        print(f"| {name} | {len(points):,} | {result.report['seconds']['total']:.0f} | "
+              f"{automatic['rounds'][0]['first_pairs']} | {len(automatic['rounds'])} ({automatic['stopped']}) | "
+              f"{100 * before['rms_relative']:.2f} / {100 * before['max_relative']:.1f} | "
+              f"{100 * after['rms_relative']:.2f} / {100 * after['max_relative']:.1f} |", flush=True)
 
 
 def main(argv=None) -> None:
@@ -295,6 +326,7 @@ def main(argv=None) -> None:
         return
     if args.auto:
         auto_main(args)
+        auto_scans()
         return
 
     header = ["mesh", "scenario", "pairs", "input", "baseline", *MODES, "s local", "s solve", "s warp", "s total"]

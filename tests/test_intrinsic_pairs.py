@@ -1,0 +1,181 @@
+"""Automatic pairs beyond one mirror plane: the intrinsic (Laplace-Beltrami) mirror map for bent and
+articulated shapes, whitening for compressed and sheared ones, and the choice between them."""
+
+import warnings
+
+import numpy as np
+import pytest
+from scipy.spatial import ConvexHull
+
+from filter_symblend import GeometryError, SymblendWarning, symmetrize, synthetic
+from filter_symblend.auto_pairs import WHITENED_DIRECTIONS, WHITENED_STARTS, intrinsic_correspondence
+from filter_symblend.geometry import hemisphere_directions, whitening
+from filter_symblend.mesh_geometry import mean_spacing
+from filter_symblend.spectral import laplace_eigenfunctions
+from filter_symblend.surface_symmetry import fit_surface_mirror_plane, promising_normals
+
+
+def unit_sphere(count: int = 4000):
+    """A triangulated unit sphere: the convex hull of a Fibonacci spiral of ``count`` points."""
+    k = np.arange(count) + 0.5
+    z = 1.0 - 2.0 * k / count
+    angle = np.pi * (1.0 + np.sqrt(5.0)) * k
+    points = np.column_stack([np.sqrt(1 - z**2) * np.cos(angle), np.sqrt(1 - z**2) * np.sin(angle), z])
+    return points, ConvexHull(points).simplices
+
+
+def test_sphere_eigenfunctions_are_the_spherical_harmonics():
+    """On the unit sphere the Laplace-Beltrami eigenvalues are l(l + 1), 2l + 1 times each; the
+    eigenfunctions of l = 1 are the coordinates. With the areas normalized to total 1 the
+    eigenvalues scale by the area 4 pi."""
+    points, faces = unit_sphere()
+    functions, areas = laplace_eigenfunctions(points, faces, 9)
+    assert areas.sum() == pytest.approx(1.0)
+    np.testing.assert_allclose(functions.T @ (areas[:, None] * functions), np.eye(9), atol=1e-8)
+    from filter_symblend.spectral import cotangent_laplacian
+    stiffness, _ = cotangent_laplacian(points, faces)
+    values = np.einsum("ni,ni->i", functions, stiffness @ functions) / (4 * np.pi)
+    np.testing.assert_allclose(values, [0, 2, 2, 2, 6, 6, 6, 6, 6], atol=0.02 * 6)
+    # the l = 1 eigenspace is spanned by x, y, z
+    coefficients = np.linalg.lstsq(points, functions[:, 1:4], rcond=None)[0]
+    np.testing.assert_allclose(points @ coefficients, functions[:, 1:4], atol=0.01)
+
+
+def test_hemisphere_directions_are_unit_spread_and_on_one_side():
+    directions = hemisphere_directions(200)
+    np.testing.assert_allclose(np.linalg.norm(directions, axis=1), 1.0)
+    assert (directions[:, 2] >= 0).all()
+    cosines = np.abs(directions @ directions.T)[~np.eye(200, dtype=bool)]
+    assert cosines.max() < np.cos(np.radians(5))  # no two planes within 5 degrees
+    # and every plane normal is within 8 degrees of one of them
+    probe = np.random.default_rng(0).normal(size=(2000, 3))
+    probe /= np.linalg.norm(probe, axis=1, keepdims=True)
+    assert np.abs(probe @ directions.T).max(axis=1).min() > np.cos(np.radians(8))
+
+
+@pytest.mark.parametrize("seed", [None, 7, 8])
+def test_a_sheared_symmetric_shape_is_mirror_symmetric_once_whitened(cow, seed):
+    sheared = synthetic.compress(cow.points, [1, 1, 0], 0.6, shear=0.2)
+    if seed is not None:
+        sheared = synthetic.random_rigid(sheared, seed)
+    white = (sheared - sheared.mean(axis=0)) @ whitening(sheared)
+    np.testing.assert_allclose(np.cov(white.T, bias=True), np.eye(3), atol=1e-12)
+    starts = promising_normals(white, hemisphere_directions(WHITENED_DIRECTIONS), WHITENED_STARTS)
+    plane = fit_surface_mirror_plane(white, axes=starts)
+    mirrored = white[cow.all_left] - 2 * (white[cow.all_left] @ plane[0] - plane[1])[:, None] * plane[0]
+    # a few vertices of the cow have no exact twin, so the covariance is symmetric to about 1e-4
+    assert np.abs(mirrored - white[cow.all_right]).max() < 2e-3 * np.ptp(white, axis=0).max()
+
+
+def test_the_intrinsic_map_pairs_a_strongly_bent_shape_where_one_plane_cannot(cow):
+    bent = synthetic.random_rigid(synthetic.bend(cow.points, 1.2), seed=4)
+    plane = fit_surface_mirror_plane(bent)
+    correspondence = intrinsic_correspondence(bent, cow.faces, *plane)
+    twin = np.full(len(cow.points), -1)
+    twin[cow.all_left], twin[cow.all_right] = cow.all_right, cow.all_left
+    paired = (correspondence.partner >= 0) & (twin >= 0) & (correspondence.partner != np.arange(len(twin)))
+    error = np.linalg.norm(cow.points[correspondence.partner[paired]] - cow.points[twin[paired]], axis=1)
+    error /= mean_spacing(cow.points, cow.faces)
+    print(f"paired {correspondence.paired_fraction:.2f}, twin error (edges): median {np.median(error):.2f}, "
+          f"90 % {np.quantile(error, 0.9):.2f}")
+    assert correspondence.paired_fraction > 0.6  # measured 0.73
+    assert np.median(error) < 0.5 and np.quantile(error, 0.9) < 2.5  # measured 0.0 and 1.4
+    # sides are consistent: every left vertex of the correspondence is on the cow's true left
+    left = correspondence.side > 0
+    assert np.mean(np.sign(cow.points[left, 0] - cow.offset) > 0) > 0.95
+
+
+@pytest.mark.parametrize("scenario", ["articulated", "bend 0.2 rad"])
+def test_bent_and_articulated_shapes_need_no_landmarks(cow, scenario):
+    """Without landmarks, the intrinsic pairs symmetrize as well as 100 hand-placed pairs."""
+    weights = synthetic.limb_weights(cow.points, **synthetic.LIMBS["cow"])
+    deform = {"articulated": lambda p: synthetic.articulate_limb(p, weights, 0.6),
+              "bend 0.2 rad": lambda p: synthetic.bend(p, 0.2)}[scenario]
+    deformed = synthetic.random_rigid(deform(cow.points), seed=7)
+    left, right = cow.landmarks(100)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SymblendWarning)
+        landmarks = symmetrize(deformed, left, right, mode="affine")
+    automatic = symmetrize(deformed, faces=cow.faces, pairs="auto", mode="affine")
+    errors = [synthetic.symmetry_error(p, cow.all_left, cow.all_right) for p in
+              (deformed, landmarks.points, automatic.points)]
+    print(scenario, "symmetry error, input / 100 landmarks / auto:", errors)
+    assert automatic.report["auto_pairs"]["rounds"][0]["first_pairs"] == "intrinsic"
+    assert errors[2] < errors[0] / 5  # measured 8x (articulated), 23x (bend)
+    assert errors[2] < 1.5 * errors[1]  # measured 0.92x (articulated), 1.4x (bend)
+
+
+def test_a_compressed_and_sheared_shape_is_restored_exactly_without_landmarks(cow):
+    sheared = synthetic.random_rigid(synthetic.compress(cow.points, [1, 1, 0], 0.6, shear=0.2), seed=7)
+    result = symmetrize(sheared, faces=cow.faces, pairs="auto", mode="affine")
+    auto = result.report["auto_pairs"]
+    assert auto["rounds"][0]["first_pairs"] == "whitened mirror plane"
+    assert "intrinsic" not in auto["first_candidates"]  # the whitened plane paired 97 %: no need to try
+    assert synthetic.symmetry_error(result.points, cow.all_left, cow.all_right) < 1e-4  # measured 1e-5
+
+
+def test_rounds_that_do_not_make_the_surface_more_symmetric_are_not_kept(cow):
+    bent = synthetic.random_rigid(synthetic.bend(cow.points, 1.2), seed=7)
+    result = symmetrize(bent, faces=cow.faces, pairs="auto", mode="affine")
+    rounds = result.report["auto_pairs"]["rounds"]
+    kept = [entry["surface_asymmetry"] for entry in rounds if entry.get("kept", True) and "pairs" in entry]
+    assert kept == sorted(kept, reverse=True)
+    from importlib import import_module
+    assert import_module("filter_symblend.symmetrize")._surface_asymmetry(result, cow.faces) == kept[-1]
+    if result.report["auto_pairs"]["stopped"] == "no gain":
+        assert rounds[-1]["kept"] is False and rounds[-1]["surface_asymmetry"] >= kept[-1]
+
+
+def test_a_shape_no_candidate_can_pair_is_refused_naming_each_candidate(cow):
+    """The Figure 1 map (bend, then oblique compression and shear) defeats all three candidates;
+    symmetrizing with their pairs made it less symmetric, so it is refused."""
+    deformed = synthetic.random_rigid(synthetic.figure_1_deformation(cow.points), seed=7)
+    with pytest.raises(GeometryError, match=r"no usable mirror pairs \(mirror plane: rejected: its pairs are not "
+                       r"locally mirror-symmetric .*whitened mirror plane: .*intrinsic: .*pairs='landmarks\+auto'"):
+        symmetrize(deformed, faces=cow.faces, pairs="auto", mode="affine")
+
+
+def test_a_point_cloud_skips_the_intrinsic_candidate_and_says_why(cow):
+    bent = synthetic.bend(cow.points, 0.2)
+    result = symmetrize(bent, pairs="auto", mode="affine")
+    reason = result.report["auto_pairs"]["first_candidates"]["intrinsic"]
+    assert reason == "the intrinsic candidate needs triangles; this is a point cloud"
+
+
+def test_a_mesh_above_the_size_limit_skips_the_intrinsic_candidate_and_says_why(cow, monkeypatch):
+    from filter_symblend import auto_pairs
+    monkeypatch.setattr(auto_pairs, "INTRINSIC_VERTEX_LIMIT", 1000)
+    result = symmetrize(synthetic.bend(cow.points, 0.2), faces=cow.faces, pairs="auto")
+    assert result.report["auto_pairs"]["first_candidates"]["intrinsic"] == (
+        "skipped: the mesh has 2,904 vertices, the intrinsic candidate is tried up to 1,000")
+
+
+def test_a_failed_eigenproblem_drops_the_intrinsic_candidate_with_its_reason(cow, monkeypatch):
+    from scipy.sparse.linalg import ArpackNoConvergence
+
+    from filter_symblend import spectral
+
+    def no_convergence(*args, **kwargs):
+        raise ArpackNoConvergence("No convergence", np.zeros(0), np.zeros((0, 0)))
+
+    monkeypatch.setattr(spectral, "eigsh", no_convergence)
+    result = symmetrize(synthetic.bend(cow.points, 0.2), faces=cow.faces, pairs="auto")
+    assert result.report["auto_pairs"]["first_candidates"]["intrinsic"] == (
+        "the Laplace-Beltrami eigenproblem failed (ARPACK error -1: No convergence)")
+
+
+def test_a_later_round_that_finds_too_few_pairs_keeps_the_last_good_result(cow, monkeypatch):
+    from importlib import import_module
+
+    from filter_symblend.auto_pairs import MirrorCorrespondence
+    module = import_module("filter_symblend.symmetrize")
+    bent = synthetic.bend(cow.points, 0.2)
+    first = symmetrize(bent, faces=cow.faces, pairs="auto", auto_iterations=1)
+    monkeypatch.setattr(module, "mirror_correspondence", lambda points, *args: MirrorCorrespondence(
+        np.full(len(points), -1), np.zeros(len(points), dtype=np.int8), 0, 0))
+    result = symmetrize(bent, faces=cow.faces, pairs="auto")
+    auto = result.report["auto_pairs"]
+    assert auto["stopped"] == "round failed" and not auto["converged"]
+    assert auto["rounds"][-1]["kept"] is False
+    assert auto["rounds"][-1]["failed"].startswith("Automatic pairing found 0 mirror pair(s) on the surface")
+    np.testing.assert_array_equal(result.points, first.points)
