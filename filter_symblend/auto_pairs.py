@@ -35,6 +35,18 @@ from .surface_symmetry import fit_surface_mirror_plane, promising_normals
 # tessellated differently needs up to about 0.5 to find pairs at all.
 MIN_MATCH_DISTANCE = 0.1
 MAX_MATCH_DISTANCE = 0.5
+# x spacing: a vertex is its own twin (a midline point) only if its mirror image lies this
+# close to it, i.e. it is within 0.05 edge lengths of the mirror plane. With the general
+# acceptance distance instead, vertices up to half an edge off the plane of the cow became
+# midline points, were pulled onto the plane by the solve, and left the symmetry error of
+# the cow bent by 0.2 rad at 0.05 % instead of 0.002 % with the true pairs.
+MIDLINE_DISTANCE = 0.1
+# x spacing: a pair is dropped when its twin is this much farther than the local mirror map
+# of its neighbours predicts. On the cow bent by 0.2 rad, the intrinsic pairs that are
+# right stay within 0.11-0.15 edges for 99 %, the wrong ones (near the midline, or on the
+# few vertices without an exact twin) are 0.23-0.5 edges off; dropping those took the
+# symmetry error of the solve from 0.019 % to 0.0024 % (0.0021 % with the true pairs).
+OUTLIER = 0.15
 SEED_COSINE = 0.9  # normals of a seed pair agree under the reflection at least this well
 MATCH_COSINE = 0.7  # the same for grown pairs
 NEIGHBOURS = 12  # paired vertices fitting each local mirror map
@@ -44,6 +56,7 @@ FRONTIER = 3.0  # x spacing: vertices this close to the paired region are tried 
 # map alone are within 2.5 edges for 90 % of the pairs and up to 11 edges off; grown from
 # the seeds kept, 90 % are within 1.1 edges (the rest at the ends of the body).
 SEED_AGREEMENT = 0.5
+SHORT_PAIR = 4.0  # x spacing: intrinsic seeds this short or shorter are not used
 RIDGE = 0.05  # pull of the local affine map toward the rigid one, x the neighbourhood's spread
 # Largest mesh for the intrinsic candidate: its eigenproblem takes 11-17 s and about 1 GB
 # at 134k vertices (Igea) and grows faster than linearly.
@@ -93,7 +106,7 @@ def _seed(points, normals, oriented, tree, spacing, plane_normal, plane_offset):
     tolerance = spacing * np.clip(2.0 * np.median(distance[mutual]) / spacing,
                                   MIN_MATCH_DISTANCE, MAX_MATCH_DISTANCE)
     mirrored_normals = normals - 2.0 * np.outer(normals @ plane_normal, plane_normal)
-    good = (mutual & (distance < tolerance)
+    good = (mutual & (distance < np.where(nearest == index, MIDLINE_DISTANCE * spacing, tolerance))
             & (_agreement(mirrored_normals, normals[nearest], oriented) > SEED_COSINE))
     partner = np.where(good, nearest, -1)
     height = points @ plane_normal - plane_offset
@@ -130,14 +143,17 @@ def _predict(points, normals, partner, sources, paired_tree, paired, leave_out=F
 
 def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, plane_offset: float,
                           fixed_pairs: tuple[np.ndarray, np.ndarray] | None = None,
-                          fixed_midline: np.ndarray | None = None, plane_seeds: bool = True) -> MirrorCorrespondence:
+                          fixed_midline: np.ndarray | None = None,
+                          seed_pairs: tuple[np.ndarray, np.ndarray] | None = None) -> MirrorCorrespondence:
     """Mirror twins of the vertices ``points`` (N, 3) of a mesh (``faces`` (F, 3), may be empty).
 
     ``plane_normal`` (3,), ``plane_offset``: the global mirror plane the seeds come
     from (normal . x = offset; the normal points to the left side). ``fixed_pairs``
     (left (n,), right (n,)) and ``fixed_midline`` (m,): vertex indices of known pairs
-    (the user's landmarks), seeded as given. ``plane_seeds=False``: the fixed pairs are
-    the only seeds (the plane still sets the acceptance distance).
+    (the user's landmarks), seeded as given and always kept. ``seed_pairs`` (left (k,),
+    right (k,)): seeds found otherwise (e.g. by the intrinsic map), used instead of the
+    plane's (the plane still sets the acceptance distance). At the end, pairs that
+    disagree with the local mirror map of their neighbours are dropped (see ``OUTLIER``).
     """
     points = np.asarray(points, dtype=float)
     plane_normal = normalize(np.asarray(plane_normal, dtype=float))
@@ -145,16 +161,21 @@ def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, p
     spacing = mean_spacing(points, faces)
     tree = cKDTree(points)
     partner, side, tolerance = _seed(points, normals, oriented, tree, spacing, plane_normal, plane_offset)
-    if not plane_seeds:
+    if seed_pairs is not None:
         partner[:], side[:] = -1, 0
+        partner[seed_pairs[0]], partner[seed_pairs[1]] = seed_pairs[1], seed_pairs[0]
+        side[seed_pairs[0]], side[seed_pairs[1]] = 1, -1
+    fixed = np.zeros(len(points), dtype=bool)
     if fixed_pairs is not None:
         left, right = fixed_pairs
         stale = np.isin(partner, np.concatenate([left, right]))  # vertices seeded onto a landmark
         partner[stale], side[stale] = -1, 0
         partner[left], partner[right] = right, left
         side[left], side[right] = 1, -1
+        fixed[left] = fixed[right] = True
     if fixed_midline is not None:
         partner[fixed_midline], side[fixed_midline] = fixed_midline, 0
+        fixed[fixed_midline] = True
     seeds = int(np.count_nonzero(partner >= 0))
     waves = 0
     while seeds >= 4:
@@ -167,7 +188,8 @@ def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, p
             break
         predicted, mapped_normals, neighbours = _predict(points, normals, partner, sources, paired_tree, paired)
         distance, twin = tree.query(predicted)
-        good = ((distance < tolerance) & ((partner[twin] < 0) | (twin == sources))
+        good = ((distance < np.where(twin == sources, MIDLINE_DISTANCE * spacing, tolerance))
+                & ((partner[twin] < 0) | (twin == sources))
                 & ((twin == sources) | (_agreement(mapped_normals, normals[twin], oriented) > MATCH_COSINE)))
         sources, twin, distance = sources[good], twin[good], distance[good]
         # One source per twin (the closest), then the twin must predict the source back.
@@ -196,7 +218,31 @@ def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, p
         partner[s], partner[t] = t, s
         side[s], side[t] = np.where(s == t, 0, v), np.where(s == t, 0, -v)
         waves += 1
+    outliers = _outliers(points, normals, partner, spacing) & ~fixed
+    outliers |= outliers[np.maximum(partner, 0)] & (partner >= 0)  # both ends of a pair
+    partner[outliers], side[outliers] = -1, 0
     return MirrorCorrespondence(partner, side, seeds, waves)
+
+
+def _misfits(points, normals, partner) -> tuple[np.ndarray, np.ndarray]:
+    """(paired vertices (n,), misfit (n,)): how far each paired vertex's twin is from where the
+    local mirror map of the neighbouring pairs, fitted without the pair itself, puts it."""
+    paired = np.flatnonzero(partner >= 0)
+    if len(paired) <= NEIGHBOURS:
+        return paired, np.zeros(len(paired))
+    predicted, _, _ = _predict(points, normals, partner, paired, cKDTree(points[paired]), paired, leave_out=True)
+    return paired, np.linalg.norm(predicted - points[partner[paired]], axis=1)
+
+
+def _outliers(points, normals, partner, spacing) -> np.ndarray:
+    """Paired vertices (N,) bool whose misfit (see ``_misfits``) exceeds OUTLIER x spacing, or
+    twice the median misfit where the pairs agree less well (scans whose two sides are
+    tessellated differently)."""
+    paired, misfit = _misfits(points, normals, partner)
+    outliers = np.zeros(len(points), dtype=bool)
+    if len(paired):
+        outliers[paired] = misfit > max(OUTLIER * spacing, 2.0 * np.median(misfit))
+    return outliers
 
 
 def spread_pairs(points: np.ndarray, correspondence: MirrorCorrespondence, count: int,
@@ -231,27 +277,23 @@ def intrinsic_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal
     sample, twin, round_trip = intrinsic_mirror_map(points, faces, initial)
     consistent = np.linalg.norm(points[round_trip] - points[sample], axis=1) < spacing
     sample, twin = sample[consistent], twin[consistent]
-    on_midline = np.linalg.norm(points[twin] - points[sample], axis=1) < spacing
+    # The eigenfunctions cannot tell a vertex near the midline from its twin a few edges away,
+    # so the map's pairs that short (and its midline points) are not used: the growth finds
+    # them from the pairs around.
+    far = np.linalg.norm(points[twin] - points[sample], axis=1) > SHORT_PAIR * spacing
+    sample, twin = sample[far], twin[far]
     leftward = (points[sample] - points[twin]) @ plane_normal > 0
-    pairs = np.column_stack([np.where(leftward, sample, twin), np.where(leftward, twin, sample)])[~on_midline]
-    pairs = np.unique(pairs, axis=0)  # a pair found from both of its ends counts once
-    midline = sample[on_midline]
-    uses = np.bincount(np.concatenate([pairs.ravel(), midline]), minlength=len(points))
-    pairs, midline = pairs[(uses[pairs] == 1).all(axis=1)], midline[uses[midline] == 1]  # no vertex in two
+    pairs = np.unique(np.column_stack([np.where(leftward, sample, twin), np.where(leftward, twin, sample)]),
+                      axis=0)  # a pair found from both of its ends counts once
+    pairs = pairs[(np.bincount(pairs.ravel(), minlength=len(points))[pairs] == 1).all(axis=1)]  # no vertex in two
     left, right = pairs.T
     partner = np.full(len(points), -1)
-    partner[left], partner[right], partner[midline] = right, left, midline
-    paired = np.flatnonzero(partner >= 0)
-    if len(paired) > NEIGHBOURS:
-        normals, _ = vertex_normals(points, faces)
-        predicted, _, _ = _predict(points, normals, partner, paired, cKDTree(points[paired]), paired,
-                                   leave_out=True)
-        agrees = np.zeros(len(points), dtype=bool)
-        agrees[paired] = np.linalg.norm(predicted - points[partner[paired]], axis=1) < SEED_AGREEMENT * spacing
-        both = agrees[left] & agrees[right]
-        left, right, midline = left[both], right[both], midline[agrees[midline]]
-    return mirror_correspondence(points, faces, plane_normal, plane_offset, (left, right), midline,
-                                 plane_seeds=False)
+    partner[left], partner[right] = right, left
+    paired, misfit = _misfits(points, vertex_normals(points, faces)[0], partner)
+    agrees = np.zeros(len(points), dtype=bool)
+    agrees[paired] = misfit < SEED_AGREEMENT * spacing
+    both = agrees[left] & agrees[right]
+    return mirror_correspondence(points, faces, plane_normal, plane_offset, seed_pairs=(left[both], right[both]))
 
 
 def first_correspondences(points: np.ndarray, faces: np.ndarray, normal: np.ndarray, offset: float):

@@ -30,6 +30,7 @@ EIGENFUNCTIONS = 60  # largest basis of the ZoomOut
 # even (the mirror map and the identity look alike on them) and ZoomOut from there
 # falls into the identity; from 10 it finds the mirror map.
 FIRST_EIGENFUNCTIONS = 10
+MIN_VERTICES = 4 * EIGENFUNCTIONS  # fewer cannot resolve the basis
 SAMPLES = 3000  # vertices (farthest-point sample) on which the point maps of the ZoomOut run
 
 
@@ -80,8 +81,9 @@ def intrinsic_mirror_map(points: np.ndarray, faces: np.ndarray, initial_twin: np
     vertex indices, round_trip (S,) vertex indices): ``round_trip`` is the twin
     of the twin, the sample vertex itself where the map is consistent.
     """
-    count = min(EIGENFUNCTIONS, len(points) - 2)
-    functions, areas = laplace_eigenfunctions(points, faces, count)
+    if len(points) < MIN_VERTICES:
+        raise GeometryError(f"the mesh has {len(points)} vertices, the intrinsic map needs {MIN_VERTICES}")
+    functions, areas = laplace_eigenfunctions(points, faces, EIGENFUNCTIONS)
     sample = np.arange(len(points))
     if len(points) > SAMPLES:
         sample = np.sort(farthest_point_order(points, SAMPLES))
@@ -90,7 +92,7 @@ def intrinsic_mirror_map(points: np.ndarray, faces: np.ndarray, initial_twin: np
     sample_areas = np.bincount(nearest, weights=areas, minlength=len(sample))
     twin = nearest[initial_twin[sample]]  # indices into the sample
     embedding = functions[sample]
-    for k in range(min(FIRST_EIGENFUNCTIONS, count), count + 1):
+    for k in range(FIRST_EIGENFUNCTIONS, EIGENFUNCTIONS + 1):
         basis = embedding[:, :k]
         functional_map = _orthogonal(basis.T @ (sample_areas[:, None] * basis[twin]))
         twin = cKDTree(basis).query(basis @ functional_map)[1]

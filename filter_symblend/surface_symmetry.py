@@ -74,12 +74,14 @@ def promising_normals(points: np.ndarray, normals: np.ndarray, keep: int) -> np.
     return normals[np.argsort(scores)[:keep]]
 
 
-def mirror_distances(points: np.ndarray, faces: np.ndarray, normal, offset: float) -> np.ndarray:
-    """Distance (N,) from each vertex to the surface reflected across the plane (mesh units)."""
+def mirror_distances(points: np.ndarray, faces: np.ndarray, normal, offset: float, every: int = 1) -> np.ndarray:
+    """Distance (N // every,) from every ``every``-th vertex to the surface reflected across the
+    plane (mesh units)."""
     mirrored = reflection_across_plane(points, np.asarray(normal, dtype=float), offset)
+    queries = points[::every]
     if len(faces) == 0:  # a point cloud: distance to the nearest reflected point
-        return cKDTree(mirrored).query(points)[0]
-    return np.linalg.norm(closest_points_on_surface(mirrored, faces, points) - points, axis=1)
+        return cKDTree(mirrored).query(queries)[0]
+    return np.linalg.norm(closest_points_on_surface(mirrored, faces, queries) - queries, axis=1)
 
 
 def mirror_asymmetry(points: np.ndarray, faces: np.ndarray, initial: MirrorFit | None = None,

@@ -30,16 +30,20 @@ from .warp import ApproximateThinPlateSpline, thin_plate_spline
 POOR_PAIR_MISFIT = 1.5
 SWAPPED_COSINE = -0.5  # a pair whose gap points this far against its local normal looks swapped
 CONVERGED_CHANGE = 1e-3  # automatic pairing has converged when fewer vertices than this change twin
-# Pairs from automatic candidates whose median local fit residual (Step 1, relative to the
-# neighbourhood radius) exceeds this are not mirror pairs. Measured on the cow and spot
-# (symmetric, bent, articulated, sheared; each candidate): 0-0.13 where the pairs are
-# sound or only slid along the surface, 0.6-0.8 where they are garbage (Figure 1 map), and
-# 0.19 for a plane through a random Gaussian cloud.
+# A candidate's pairs are not mirror pairs when their median local fit residual (Step 1,
+# relative to the neighbourhood radius) exceeds SOUND_LOCAL_FIT, or when it pairs fewer than
+# SOUND_PAIRED of the vertices (the outliers it drops leave little). Measured on the cow and
+# spot (symmetric, bent, articulated, sheared, Figure 1 map; every candidate): residual
+# 0-0.135, and a plane through a random Gaussian cloud 0.19; paired 0.25-1.0 where the
+# pairs are sound or only slid along the surface, 0.09-0.14 on the cow under the Figure 1
+# map, where symmetrizing them made the cow less symmetric than its input.
 SOUND_LOCAL_FIT = 0.15
+SOUND_PAIRED = 0.2
 # A candidate that pairs this fraction of the vertices is taken without trying the others:
 # one plane pairs 97-100 % of the exactly symmetric cow and spot, 93 % of spot with one
 # leg swung (where the intrinsic candidate is right), at most 84 % of other deformed ones.
 GLOBALLY_SYMMETRIC = 0.95
+SCORE_SAMPLES = 50_000  # evenly strided vertices at which an output's mirror asymmetry is scored
 TWIN_MOVE = 2.0  # reported: twins that moved farther than this many mean edge lengths
 
 
@@ -316,6 +320,10 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
                 candidates[name] = (f"rejected: its pairs are not locally mirror-symmetric (median local fit "
                                     f"residual {entry['local_fit_residual']:.2f} > {SOUND_LOCAL_FIT})")
                 continue
+            if entry["paired_vertices"] < SOUND_PAIRED:
+                candidates[name] = (f"rejected: it pairs {entry['paired_vertices']:.0%} of the vertices, "
+                                    f"fewer than {SOUND_PAIRED:.0%}")
+                continue
             candidates[name] = {key: entry[key] for key in ("surface_asymmetry", "local_fit_residual",
                                                             "paired_vertices")}
             at_once = entry["paired_vertices"] >= GLOBALLY_SYMMETRIC
@@ -387,9 +395,10 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
 
 
 def _surface_asymmetry(result: SymmetrizationResult, faces: np.ndarray) -> float:
-    """RMS distance of the output's vertices to its reflection across its plane, / the diagonal."""
+    """RMS distance of the output's vertices (at most about SCORE_SAMPLES, evenly strided) to its
+    reflection across its plane, / the diagonal."""
     distances = mirror_distances(result.points, faces, np.asarray(result.report["plane_normal"]),
-                                 result.report["plane_offset"])
+                                 result.report["plane_offset"], every=max(1, len(result.points) // SCORE_SAMPLES))
     return float(np.sqrt(np.mean(distances**2)) / result.report["diagonal"])
 
 

@@ -78,8 +78,8 @@ def test_the_intrinsic_map_pairs_a_strongly_bent_shape_where_one_plane_cannot(co
     error /= mean_spacing(cow.points, cow.faces)
     print(f"paired {correspondence.paired_fraction:.2f}, twin error (edges): median {np.median(error):.2f}, "
           f"90 % {np.quantile(error, 0.9):.2f}")
-    assert correspondence.paired_fraction > 0.6  # measured 0.73
-    assert np.median(error) < 0.5 and np.quantile(error, 0.9) < 2.5  # measured 0.0 and 1.4
+    assert correspondence.paired_fraction > 0.4  # measured 0.49 (one plane: 0.25)
+    assert np.median(error) < 0.25 and np.quantile(error, 0.9) < 1.0  # measured 0.0 and 0.57
     # sides are consistent: every left vertex of the correspondence is on the cow's true left
     left = correspondence.side > 0
     assert np.mean(np.sign(cow.points[left, 0] - cow.offset) > 0) > 0.95
@@ -128,10 +128,11 @@ def test_rounds_that_do_not_make_the_surface_more_symmetric_are_not_kept(cow):
 
 def test_a_shape_no_candidate_can_pair_is_refused_naming_each_candidate(cow):
     """The Figure 1 map (bend, then oblique compression and shear) defeats all three candidates;
-    symmetrizing with their pairs made it less symmetric, so it is refused."""
+    symmetrizing with their pairs made the cow less symmetric, so it is refused."""
     deformed = synthetic.random_rigid(synthetic.figure_1_deformation(cow.points), seed=7)
-    with pytest.raises(GeometryError, match=r"no usable mirror pairs \(mirror plane: rejected: its pairs are not "
-                       r"locally mirror-symmetric .*whitened mirror plane: .*intrinsic: .*pairs='landmarks\+auto'"):
+    with pytest.raises(GeometryError, match=r"no usable mirror pairs \(mirror plane: rejected: it pairs \d+% of the "
+                       r"vertices, fewer than 20%; whitened mirror plane: rejected: .*; intrinsic: rejected: .*\)\. "
+                       r"The shape may be too far .* use pairs='landmarks\+auto'\."):
         symmetrize(deformed, faces=cow.faces, pairs="auto", mode="affine")
 
 
@@ -179,3 +180,10 @@ def test_a_later_round_that_finds_too_few_pairs_keeps_the_last_good_result(cow, 
     assert auto["rounds"][-1]["kept"] is False
     assert auto["rounds"][-1]["failed"].startswith("Automatic pairing found 0 mirror pair(s) on the surface")
     np.testing.assert_array_equal(result.points, first.points)
+
+
+def test_a_mesh_too_small_for_the_eigenbasis_is_refused_by_the_intrinsic_map():
+    from filter_symblend.spectral import intrinsic_mirror_map
+    points, faces = unit_sphere(200)
+    with pytest.raises(GeometryError, match=r"^the mesh has 200 vertices, the intrinsic map needs 240$"):
+        intrinsic_mirror_map(points, faces, np.arange(200))
