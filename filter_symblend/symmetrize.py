@@ -276,8 +276,9 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
 
     ``landmarks``: None, or the checked (left, right, ids, midline, wl, wr) of the user's pairs,
     solved alone first and always kept, weighted ``landmark_priority`` times more. Without
-    landmarks the first round tries every candidate of :func:`first_correspondences` and
-    keeps the most symmetric output.
+    landmarks the first round tries the candidates of :func:`first_correspondences` in turn,
+    rejects those whose pairs are not sound, takes the first that pairs GLOBALLY_SYMMETRIC of
+    the vertices at once, or else the one with the most mirror-symmetric output.
     """
     clock = time.perf_counter()
     rounds = options["auto_iterations"]
