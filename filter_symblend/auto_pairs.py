@@ -182,11 +182,14 @@ def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, p
         fixed[fixed_midline] = True
     seeds = int(np.count_nonzero(partner >= 0))
     waves = 0
+    added = np.flatnonzero(partner >= 0)
     while seeds >= 4:
         paired = np.flatnonzero(partner >= 0)
         paired_tree = cKDTree(points[paired])
+        # Only vertices near the pairs added last can get a new prediction: the others' nearest
+        # pairs, hence their local maps and their failures, are those of the wave before.
         unpaired = np.flatnonzero(partner < 0)
-        gap, _ = paired_tree.query(points[unpaired], distance_upper_bound=FRONTIER * spacing)
+        gap, _ = cKDTree(points[added]).query(points[unpaired], distance_upper_bound=FRONTIER * spacing)
         sources = unpaired[np.isfinite(gap)]
         if len(sources) == 0:
             break
@@ -221,6 +224,7 @@ def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, p
             break
         partner[s], partner[t] = t, s
         side[s], side[t] = np.where(s == t, 0, v), np.where(s == t, 0, -v)
+        added = np.unique(np.concatenate([s, t]))
         waves += 1
     outliers = _outliers(points, normals, partner, spacing) & ~fixed
     outliers |= outliers[np.maximum(partner, 0)] & (partner >= 0)  # both ends of a pair
