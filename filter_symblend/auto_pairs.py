@@ -1,15 +1,17 @@
 """Automatic mirror pairs: a dense vertex-to-vertex mirror correspondence found by the surface itself.
 
-Seeds come from one global mirror plane: vertices whose reflection lands on
-another vertex (mutual nearest neighbours) facing the mirrored way. A single
-plane cannot pair a bent or articulated shape, so the correspondence then
-grows in waves from the seeds: around each unpaired vertex, the pairs already
-found give a local mirror map (an affine map fitted to its nearest paired
-vertices, pulled toward the best improper rigid map), which predicts where
-the vertex's twin lies. The nearest vertex there is accepted if it is close
-to the prediction, faces the mirrored way, and predicts the vertex back.
-The map follows the shape as it bends, so the pairing reaches every part the
-seeds connect to, whatever single plane the whole shape is far from.
+Seeds come from a global mirror plane (vertices whose reflection lands on
+another vertex, mutual nearest neighbours, facing the mirrored way), from the
+plane of the whitened shape (compression, shear), or from the intrinsic mirror
+map of the Laplace-Beltrami eigenfunctions (bends, articulation; see
+``spectral``). The correspondence then grows in waves from the seeds: around
+each unpaired vertex, the pairs already found give a local mirror map (an
+affine map fitted to its nearest paired vertices, pulled toward the best
+improper rigid map), which predicts where the vertex's twin lies. The nearest
+vertex there is accepted if it is close to the prediction, faces the mirrored
+way, and predicts the vertex back. Finally, pairs that the local maps of their
+neighbours do not confirm are dropped: one wrong pair, forced symmetric by the
+solve, distorts its whole neighbourhood.
 
 Units: ``spacing`` is the mean edge length (mean nearest-neighbour distance
 for a point cloud); distances below are multiples of it.
