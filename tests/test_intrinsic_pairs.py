@@ -85,9 +85,12 @@ def test_the_intrinsic_map_pairs_a_strongly_bent_shape_where_one_plane_cannot(co
     assert np.mean(np.sign(cow.points[left, 0] - cow.offset) > 0) > 0.95
 
 
-@pytest.mark.parametrize("scenario", ["articulated", "bend 0.2 rad"])
-def test_bent_and_articulated_shapes_need_no_landmarks(cow, scenario):
-    """Without landmarks, the intrinsic pairs symmetrize as well as 100 hand-placed pairs."""
+# Largest ratio of the automatic symmetry error to that of 100 landmark pairs, measured:
+# articulated 0.99 (the limb stays a third unpaired), bend 0.2 rad 0.06 (the issue's 1/5).
+@pytest.mark.parametrize(("scenario", "ratio"), [("articulated", 1.1), ("bend 0.2 rad", 0.2)])
+def test_bent_and_articulated_shapes_need_no_landmarks(cow, scenario, ratio):
+    """Without landmarks, the intrinsic pairs symmetrize as well as 100 hand-placed pairs, or
+    (a mild bend) five times better."""
     weights = synthetic.limb_weights(cow.points, **synthetic.LIMBS["cow"])
     deform = {"articulated": lambda p: synthetic.articulate_limb(p, weights, 0.6),
               "bend 0.2 rad": lambda p: synthetic.bend(p, 0.2)}[scenario]
@@ -101,8 +104,8 @@ def test_bent_and_articulated_shapes_need_no_landmarks(cow, scenario):
               (deformed, landmarks.points, automatic.points)]
     print(scenario, "symmetry error, input / 100 landmarks / auto:", errors)
     assert automatic.report["auto_pairs"]["rounds"][0]["first_pairs"] == "intrinsic"
-    assert errors[2] < errors[0] / 5  # measured 8x (articulated), 23x (bend)
-    assert errors[2] < 1.5 * errors[1]  # measured 0.92x (articulated), 1.4x (bend)
+    assert errors[2] < errors[0] / 5  # measured 7x (articulated), 500x (bend)
+    assert errors[2] < ratio * errors[1]
 
 
 def test_a_compressed_and_sheared_shape_is_restored_exactly_without_landmarks(cow):
