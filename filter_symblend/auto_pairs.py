@@ -64,8 +64,9 @@ SEED_AGREEMENT = 0.5
 # 0.11 %; at 4 edges it is 0.005 % (the cow: 0.002 % either way).
 SHORT_PAIR = 4.0
 RIDGE = 0.05  # pull of the local affine map toward the rigid one, x the neighbourhood's spread
-# Largest mesh for the intrinsic candidate: its eigenproblem took 15 s at 134k vertices
-# (Igea); above this, the two plane candidates keep a million-vertex run near 3 minutes.
+# Largest mesh for the intrinsic candidate: its eigenproblem took 15 s and 0.6 GB (peak RSS
+# growth) at 134k vertices (Igea); above this, the two plane candidates keep a
+# million-vertex run near 3 minutes.
 INTRINSIC_VERTEX_LIMIT = 300_000
 # Starting planes of the reflection ICP on the whitened shape: the best WHITENED_STARTS of
 # WHITENED_DIRECTIONS spread directions. On the sheared cow (compression 0.6 along (1, 1, 0),
