@@ -139,13 +139,18 @@ def _local_maps(points, partner, sources, paired_tree, paired, leave_out=False):
     return linear, cx, cy, rigid, neighbours
 
 
-def _predict(points, normals, partner, sources, paired_tree, paired, leave_out=False):
+def _predicted_twins(points, partner, sources, paired_tree, paired, leave_out=False):
+    """Predicted twin position (m, 3) of ``sources``, the improper rigid part of their local maps
+    (m, 3, 3) and the paired vertices the maps were fitted on (m, k)."""
+    linear, cx, cy, rigid, neighbours = _local_maps(points, partner, sources, paired_tree, paired, leave_out)
+    return np.einsum("nij,nj->ni", linear, points[sources] - cx) + cy, rigid, neighbours
+
+
+def _predict(points, normals, partner, sources, paired_tree, paired):
     """Predicted twin position (m, 3), mapped normal (m, 3) and the paired vertices the map was
     fitted on (m, k) for ``sources``."""
-    linear, cx, cy, rigid, neighbours = _local_maps(points, partner, sources, paired_tree, paired, leave_out)
-    predicted = np.einsum("nij,nj->ni", linear, points[sources] - cx) + cy
-    mapped_normals = np.einsum("nij,nj->ni", rigid, normals[sources])
-    return predicted, mapped_normals, neighbours
+    predicted, rigid, neighbours = _predicted_twins(points, partner, sources, paired_tree, paired)
+    return predicted, np.einsum("nij,nj->ni", rigid, normals[sources]), neighbours
 
 
 def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, plane_offset: float,
@@ -229,27 +234,27 @@ def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, p
         side[s], side[t] = np.where(s == t, 0, v), np.where(s == t, 0, -v)
         added = np.unique(np.concatenate([s, t]))
         waves += 1
-    outliers = _outliers(points, normals, partner, spacing) & ~fixed
+    outliers = _outliers(points, partner, spacing) & ~fixed
     outliers |= outliers[np.maximum(partner, 0)] & (partner >= 0)  # both ends of a pair
     partner[outliers], side[outliers] = -1, 0
     return MirrorCorrespondence(partner, side, seeds, waves)
 
 
-def _misfits(points, normals, partner) -> tuple[np.ndarray, np.ndarray]:
+def _misfits(points, partner) -> tuple[np.ndarray, np.ndarray]:
     """(paired vertices (n,), misfit (n,)): how far each paired vertex's twin is from where the
     local mirror map of the neighbouring pairs, fitted without the pair itself, puts it."""
     paired = np.flatnonzero(partner >= 0)
     if len(paired) <= NEIGHBOURS:
         return paired, np.zeros(len(paired))
-    predicted, _, _ = _predict(points, normals, partner, paired, cKDTree(points[paired]), paired, leave_out=True)
+    predicted, _, _ = _predicted_twins(points, partner, paired, cKDTree(points[paired]), paired, leave_out=True)
     return paired, np.linalg.norm(predicted - points[partner[paired]], axis=1)
 
 
-def _outliers(points, normals, partner, spacing) -> np.ndarray:
+def _outliers(points, partner, spacing) -> np.ndarray:
     """Paired vertices (N,) bool whose misfit (see ``_misfits``) exceeds OUTLIER x spacing, or
     twice the median misfit where the pairs agree less well (scans whose two sides are
     tessellated differently)."""
-    paired, misfit = _misfits(points, normals, partner)
+    paired, misfit = _misfits(points, partner)
     outliers = np.zeros(len(points), dtype=bool)
     if len(paired):
         outliers[paired] = misfit > max(OUTLIER * spacing, 2.0 * np.median(misfit))
@@ -300,7 +305,7 @@ def intrinsic_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal
     left, right = pairs.T
     partner = np.full(len(points), -1)
     partner[left], partner[right] = right, left
-    paired, misfit = _misfits(points, vertex_normals(points, faces)[0], partner)
+    paired, misfit = _misfits(points, partner)
     agrees = np.zeros(len(points), dtype=bool)
     agrees[paired] = misfit < SEED_AGREEMENT * spacing
     both = agrees[left] & agrees[right]

@@ -42,8 +42,8 @@ def fit_surface_mirror_plane(points: np.ndarray, initial: MirrorFit | None = Non
                              axes: np.ndarray | None = None) -> tuple[np.ndarray, float]:
     """Best mirror plane ``(normal (3,), offset)`` of a point set (N, 3): normal . x = offset.
 
-    Starts from the three planes through the centroid normal to ``axes`` (3, 3)
-    (rows; default the principal axes), and from ``initial`` (e.g. the
+    Starts from the planes through the centroid normal to the rows of ``axes``
+    (k, 3) (default the three principal axes), and from ``initial`` (e.g. the
     landmarks' plane), refines each by trimmed reflection ICP on at most
     ``ICP_SAMPLES`` evenly strided vertices, keeps the best.
     """
