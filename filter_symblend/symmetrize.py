@@ -43,8 +43,6 @@ SOUND_PAIRED = 0.2
 # one plane pairs 97-100 % of the exactly symmetric cow and spot, 93 % of spot with one
 # leg swung (where the intrinsic candidate is right), at most 84 % of other deformed ones.
 GLOBALLY_SYMMETRIC = 0.95
-TOO_ASYMMETRIC_FOR_AUTO = ("The shape may be too far from mirror-symmetric for automatic pairs: place a few "
-                           "landmark pairs and use pairs='landmarks+auto'.")
 SCORE_SAMPLES = 50_000  # evenly strided vertices at which an output's mirror asymmetry is scored
 TWIN_MOVE = 2.0  # reported: twins that moved farther than this many mean edge lengths
 
@@ -296,7 +294,7 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
         if len(left) + len(user[0]) < MIN_PAIRS:
             raise GeometryError(
                 f"Automatic pairing found {len(left)} mirror pair(s) on the surface; it needs at least "
-                f"{MIN_PAIRS}. {TOO_ASYMMETRIC_FOR_AUTO}")
+                f"{MIN_PAIRS}.")
         result = _solve_with_automatic_pairs(points, user, left, right, midline, options,
                                              _scaled_progress(progress, start, width))
         entry = {"pairs": int(len(left)), "midline": int(len(midline)),
@@ -337,7 +335,8 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
             raise GeometryError(
                 "Automatic pairing found no usable mirror pairs ("
                 + "; ".join(f"{name}: {reason}" for name, reason in candidates.items())
-                + f"). {TOO_ASYMMETRIC_FOR_AUTO}")
+                + "). The shape may be too far from mirror-symmetric for automatic pairs: place a few "
+                "landmark pairs and use pairs='landmarks+auto'.")
         result, entry, previous = best
         first_round, slots = 1, 2
     else:

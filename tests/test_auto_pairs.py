@@ -1,5 +1,6 @@
 """Automatic mirror pairs: exact on exactly symmetric shapes, dense on landmark runs, clear errors."""
 
+import re
 import warnings
 
 import numpy as np
@@ -130,8 +131,12 @@ def test_landmark_modes_need_landmarks():
 
 def test_a_shape_without_mirror_symmetry_is_refused_with_advice():
     points = np.random.default_rng(0).normal(size=(300, 3)) * [3.0, 2.0, 1.0]
-    with pytest.raises(GeometryError, match=r"Automatic pairing found \d+ mirror pair\(s\).*landmarks\+auto"):
+    with pytest.raises(GeometryError, match=r"Automatic pairing found \d+ mirror pair\(s\).*landmarks\+auto") as raised:
         symmetrize(points, pairs="auto")
+    message = str(raised.value)
+    assert message.count("landmarks+auto") == 1  # the advice once, not once per candidate
+    assert re.search(r"whitened mirror plane: rejected: its pairs are not locally mirror-symmetric "
+                     r"\(median local fit residual 0\.\d\d > 0\.15\)", message)
 
 
 @pytest.mark.parametrize(("value", "message"), [
