@@ -133,8 +133,10 @@ PARAMETERS: tuple[Parameter, ...] = (
         "shear) or by the intrinsic mirror map of the Laplace-Beltrami eigenfunctions (bends, "
         "articulation), grown along the surface with local mirror maps; the candidate whose "
         "output is most mirror-symmetric is kept, and the pairing is repeated on the output "
-        "while that helps. A bend combined with an oblique compression defeats it: use "
-        "landmarks there. 'landmarks+auto': "
+        "while that helps. Alone it suits scans and mildly deformed shapes (a bend of 0.2 "
+        "rad); stronger bends slide the two sides along each other, and a bend with an "
+        "oblique compression defeats it: for a deformed specimen place about 50 landmark "
+        "pairs and use 'landmarks+auto'. 'landmarks+auto': "
         "the landmarks are solved first, then automatic pairs found on that output join them "
         "and the solve is repeated, so the whole surface, not only the landmarks, comes out "
         "symmetric; the landmarks are always kept and weigh `landmark_priority` times more.",

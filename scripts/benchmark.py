@@ -12,7 +12,8 @@ Seconds are the filter's own stage timings (median of --repeat runs).
 
     python scripts/benchmark.py [--pairs 100 300 1000] [--repeat 3] [--meshes cow spot]
     python scripts/benchmark.py --scale      # speed and memory at scale, and the paper's Table 1
-    python scripts/benchmark.py --auto       # automatic pairs against 100 landmark pairs; on the Igea scan
+    python scripts/benchmark.py --auto       # automatic pairs against 100 landmark pairs, landmarks+auto with
+                                             # 10-100 landmarks, automatic pairs on the Igea scan
 """
 
 from __future__ import annotations
@@ -31,7 +32,6 @@ from filter_symblend import GeometryError, SymblendWarning, symmetrize, syntheti
 from filter_symblend.baseline import mirror_average
 from filter_symblend.global_solve import global_solve
 from filter_symblend.local_symmetries import local_symmetries
-from filter_symblend.surface_symmetry import mirror_asymmetry
 from filter_symblend.neighbourhoods import mean_nearest_spacing, pair_weights, require_connected
 
 MESHES = {
@@ -49,6 +49,13 @@ MESH_PAIR_TOLERANCE = 0.02  # mirror pairs on scans: reflections within 2 % of t
 SCAN_OPTIONS = {"mode": "standard", "phi_width": 8.0}
 BASELINE_CENTRES = 10_000  # scipy's dense RBFInterpolator beyond this: 0.8 GB and a k^3 solve, out of reach
 MODES = ("standard", "affine", "articulated")
+# Strengths of the --auto deformations: bend angles (rad), (bend angle, compression factor along (1, 1, 0),
+# shear) with the paper's Figure 1 last, and limb swings (rad).
+AUTO_BENDS = (0.2, 0.4, 0.6, 1.2)
+AUTO_BENDS_AND_COMPRESSIONS = ((0.2, 0.9, 0.05), (0.4, 0.85, 0.05), (1.2, 0.65, 0.15))
+AUTO_SWINGS = (0.15, 0.3, 0.6)
+AUTO_LANDMARK_COUNTS = (10, 20, 50, 100)  # landmark pairs placed for the landmarks+auto table
+EXACT = 1e-6  # sym error (/ diagonal) below which a result counts as exact: no ratio is printed
 STAGES = ("local_transforms", "global_solve", "warp", "total")
 
 
@@ -251,30 +258,50 @@ def _table_meshes(title: str, header: list[str], meshes: list[str]):
             print(f"| {mesh} | skipped: {MESHES[mesh]} is absent |")
 
 
+def auto_cases(points: np.ndarray, mesh: str):
+    """(name, deformed points, limb vertices or None, mode) for the automatic-pairs table: each kind of
+    deformation at increasing strength, in the mode a user would choose for it."""
+    limb = synthetic.limb_weights(points, **synthetic.LIMBS[mesh])
+    legs = np.flatnonzero(limb > 0.99)
+    yield "exactly symmetric", points, None, "affine"
+    for angle in AUTO_BENDS:
+        yield f"bend {angle} rad", synthetic.bend(points, angle), None, "affine"
+    for angle, factor, shear in AUTO_BENDS_AND_COMPRESSIONS:
+        name = "Figure 1" if (angle, factor, shear) == (1.2, 0.65, 0.15) else f"bend {angle} + compression {factor}"
+        yield name, synthetic.compress(synthetic.bend(points, angle), [1, 1, 0], factor, shear=shear), None, "affine"
+    for angle in AUTO_SWINGS:
+        yield f"limb swung {angle} rad", synthetic.articulate_limb(points, limb, angle), legs, "articulated"
+    yield "compression 0.6 + shear 0.2", synthetic.compress(points, [1, 1, 0], 0.6, shear=0.2), None, "affine"
+
+
 def auto_main(args) -> None:
-    """Rows for pairs='auto' and 'landmarks+auto' (affine mode) beside 100 landmark pairs."""
-    header = ["mesh", "scenario", "input", "100 landmarks", "auto", "landmarks+auto", "auto first pairs", "auto rounds",
-              "s auto", "s landmarks+auto"]
-    for mesh in _table_meshes("shape / sym error, % of the diagonal (lower is better); affine mode", header,
-                              args.meshes):
+    """pairs='auto' and 'landmarks+auto' beside 100 landmark pairs, deformations of rising strength."""
+    header = ["mesh", "deformation", "mode", "input", "100 landmarks", "auto", "landmarks / auto", "landmarks+auto",
+              "auto first pairs", "auto rounds", "s auto", "s landmarks+auto"]
+    for mesh in _table_meshes("shape / sym error, % of the diagonal (lower is better); landmarks / auto: ratio of "
+                              "their sym errors (the target is 5 or more)", header, args.meshes):
         points, offset, partner, all_left, all_right = load(MESHES[mesh])
         ms = pymeshlab.MeshSet()
         ms.load_new_mesh(str(MESHES[mesh]))
         faces = ms.current_mesh().face_matrix()
         left, right = synthetic.farthest_point_pairs(points, offset, partner, 100)
-        cases = [("symmetric", points, None), ("bend 0.2 rad", synthetic.bend(points, 0.2), None),
-                 *scenarios(points, mesh)]
-        for name, deformed, limb in cases:
+        for name, deformed, limb, mode in auto_cases(points, mesh):
             region = slice(None) if limb is None else np.concatenate([limb, partner[limb]])
             deformed = synthetic.random_rigid(deformed, seed=7)
             try:
-                automatic = symmetrize(deformed, faces=faces, pairs="auto", mode="affine")
+                automatic = symmetrize(deformed, faces=faces, pairs="auto", mode=mode)
             except GeometryError:
                 automatic = None  # refused: no candidate's pairs are locally mirror-symmetric
-            hybrid = symmetrize(deformed, left, right, faces=faces, pairs="landmarks+auto", mode="affine")
-            landmarks = symmetrize(deformed, left, right, mode="affine")
-            cells = [errors(out, points, all_left, all_right, region) if out is not None else "refused"
-                     for out in (deformed, landmarks.points, automatic and automatic.points, hybrid.points)]
+            hybrid = symmetrize(deformed, left, right, faces=faces, pairs="landmarks+auto", mode=mode)
+            landmarks = symmetrize(deformed, left, right, mode=mode)
+            cells = [mode] + [errors(out, points, all_left, all_right, region) if out is not None else "refused"
+                              for out in (deformed, landmarks.points, automatic and automatic.points)]
+            landmark_error = synthetic.symmetry_error(landmarks.points, all_left, all_right)
+            if automatic is None or landmark_error < EXACT:
+                cells.append("-")  # refused, or the landmarks are exact already
+            else:
+                cells.append(f"{landmark_error / synthetic.symmetry_error(automatic.points, all_left, all_right):.1f}")
+            cells.append(errors(hybrid.points, points, all_left, all_right, region))
             if automatic is None:
                 cells += ["-", "-", "-"]
             else:
@@ -286,26 +313,52 @@ def auto_main(args) -> None:
             print(f"| {mesh} | {name} | " + " | ".join(cells) + " |", flush=True)
 
 
+def auto_landmark_counts(args) -> None:
+    """Sym error of a few landmark pairs alone and with automatic pairs added (landmarks+auto): how many
+    landmarks a deformed specimen needs."""
+    header = ["mesh", "deformation", "mode", *(f"{count} landmarks / +auto" for count in AUTO_LANDMARK_COUNTS)]
+    for mesh in _table_meshes("\nsym error, % of the diagonal: landmark pairs alone / the same pairs with "
+                              "pairs='landmarks+auto'", header, args.meshes):
+        points, offset, partner, all_left, all_right = load(MESHES[mesh])
+        ms = pymeshlab.MeshSet()
+        ms.load_new_mesh(str(MESHES[mesh]))
+        faces = ms.current_mesh().face_matrix()
+        for name, deformed, _, mode in auto_cases(points, mesh):
+            deformed = synthetic.random_rigid(deformed, seed=7)
+            cells = [mode]
+            for count in AUTO_LANDMARK_COUNTS:
+                left, right = synthetic.farthest_point_pairs(points, offset, partner, count)
+                alone = symmetrize(deformed, left, right, mode=mode).points
+                hybrid = symmetrize(deformed, left, right, faces=faces, pairs="landmarks+auto", mode=mode).points
+                cells.append(" / ".join(f"{100 * synthetic.symmetry_error(out, all_left, all_right):.3f}"
+                                        for out in (alone, hybrid)))
+            print(f"| {mesh} | {name} | " + " | ".join(cells) + " |", flush=True)
+
+
 def auto_scans() -> None:
-    """pairs='auto' on the Igea scan at three sizes: time, seed source, mirror asymmetry before/after."""
+    """pairs='auto' on the Igea scan at three sizes, through the MeshSet filter as a user runs it: time, seed
+    source, mirror asymmetry before/after, two-way Hausdorff (MeshLab) between input and output."""
     if not IGEA.exists():
         print(f"\npairs='auto' on a scan: skipped, {IGEA} is absent")
         return
-    print("\npairs='auto' on the Igea scan: mirror asymmetry RMS / max, % of the diagonal")
-    print("| mesh | vertices | seconds | seeds | rounds | before | after |")
-    print("|---|---|---|---|---|---|---|")
+    print("\npairs='auto' on the Igea scan: mirror asymmetry RMS / max and two-way Hausdorff input<->output "
+          "max / mean, % of the diagonal")
+    print("| mesh | vertices | seconds | seeds | rounds | asymmetry before | asymmetry after | Hausdorff in<->out |")
+    print("|---|---|---|---|---|---|---|---|")
     for name, points, faces in igea_meshes():
         if name == "igea subdivided":
             continue
-        result = symmetrize(points, faces=faces, pairs="auto")
-        automatic = result.report["auto_pairs"]
-        plane = automatic["surface_plane"]
-        before = mirror_asymmetry(points, faces, plane=(np.asarray(plane["normal"]), plane["offset"]))
-        after = mirror_asymmetry(result.points, faces)
-        print(f"| {name} | {len(points):,} | {result.report['seconds']['total']:.0f} | "
+        ms = pymeshlab.MeshSet()
+        ms.add_mesh(pymeshlab.Mesh(vertex_matrix=points, face_matrix=faces))
+        report = ms.generate_symmetrized_mesh(pairs="auto")
+        automatic, diagonal = report["auto_pairs"], report["diagonal"]
+        before, after = report["mirror_asymmetry_before"], report["mirror_asymmetry_after"]
+        hausdorff = report["hausdorff_input_output"]
+        print(f"| {name} | {len(points):,} | {report['seconds']['total']:.0f} | "
               f"{automatic['rounds'][0]['first_pairs']} | {len(automatic['rounds'])} ({automatic['stopped']}) | "
               f"{100 * before['rms_relative']:.2f} / {100 * before['max_relative']:.1f} | "
-              f"{100 * after['rms_relative']:.2f} / {100 * after['max_relative']:.1f} |", flush=True)
+              f"{100 * after['rms_relative']:.2f} / {100 * after['max_relative']:.1f} | "
+              f"{100 * hausdorff['max'] / diagonal:.2f} / {100 * hausdorff['mean'] / diagonal:.3f} |", flush=True)
 
 
 def main(argv=None) -> None:
@@ -326,6 +379,7 @@ def main(argv=None) -> None:
         return
     if args.auto:
         auto_main(args)
+        auto_landmark_counts(args)
         auto_scans()
         return
 
