@@ -124,13 +124,15 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress) -> SymmetrizationRes
     # The fill works in the input frame, where the asymmetry (distance moved) is measured.
     core["output_frame"] = "input"
     automatic = options["pairs"] == "auto"
+    # A missing or broken part must not be paired automatically: its pairs would pull the sound side toward it.
+    excluded = region[0] > 0 if region is not None and options["pairs"] != "landmarks" else None
     if automatic:  # the landmark attributes are not read
-        result = symmetrize(points, progress=progress, faces=faces, **core)
+        result = symmetrize(points, progress=progress, faces=faces, auto_excluded=excluded, **core)
     else:
         names = {name: options[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
         pairs, left_weights, right_weights = read_landmark_attributes(mesh, **names)
         result = symmetrize(points, pairs.left, pairs.right, pairs.ids, pairs.midline,
-                            left_weights, right_weights, progress, faces, **core)
+                            left_weights, right_weights, progress, faces, excluded, **core)
         left, right = pairs.left, pairs.right
     report = result.report
     if region is not None:

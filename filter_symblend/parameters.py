@@ -186,7 +186,9 @@ PARAMETERS: tuple[Parameter, ...] = (
         "its closest point on the reflected intact surface, faded in at the border). 'none': no "
         "fill. 'weight': vertices whose weight attribute is below 1 (by 1 - weight). 'selection': "
         "the selected vertices, and the vertices whose faces are all selected (e.g. the faces "
-        "`meshing_close_holes(newfaceselected=True, refinehole=True)` just added).",
+        "`meshing_close_holes(newfaceselected=True, refinehole=True)` just added). With 'auto' "
+        "or 'landmarks+auto' these vertices are also kept out of the automatic pairs, so that "
+        "they do not pull the intact side toward their shape.",
         choices=("none", "weight", "selection"), adapter_only=True,
     ),
     Parameter(

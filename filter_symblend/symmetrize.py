@@ -12,7 +12,7 @@ import numpy as np
 
 from .asymmetry import fit_mirror_plane
 from .auto_pairs import first_correspondences, mirror_correspondence, spread_pairs
-from .errors import GeometryError, LandmarkError, SymblendWarning, id_list
+from .errors import GeometryError, LandmarkError, ParameterError, SymblendWarning, id_list
 from .geometry import minimal_rotation, normalize, rigid_fit
 from .global_solve import MINUS_X, global_solve
 from .landmarks import MIN_PAIRS, LandmarkPairs, check_pairs, check_points, midline_labels
@@ -247,35 +247,58 @@ def _checked_landmarks(points, left, right, pair_ids, midline, left_weights, rig
 
 
 def symmetrize(points, left=None, right=None, pair_ids=None, midline=None, left_weights=None,
-               right_weights=None, progress=None, faces=None, **params) -> SymmetrizationResult:
+               right_weights=None, progress=None, faces=None, auto_excluded=None, **params) -> SymmetrizationResult:
     _report_progress(progress, 0.0, "checking landmarks")
     options = validate_parameters(params, adapter=False)
     points = check_points(points)
     faces = np.zeros((0, 3), dtype=np.int64) if faces is None else np.asarray(faces, dtype=np.int64)
+    excluded = _excluded_vertices(auto_excluded, len(points), options["pairs"])
     given = left is not None or right is not None or midline is not None
     if options["pairs"] == "auto":
         if given:
             raise LandmarkError("`pairs='auto'` finds its own pairs and ignores landmarks; to use "
                                 "yours as well, pass pairs='landmarks+auto'.")
-        return _auto_symmetrize(points, faces, None, options, progress)
+        return _auto_symmetrize(points, faces, None, options, progress, excluded)
     if left is None or right is None:
         raise LandmarkError(f"`pairs='{options['pairs']}'` needs landmark pairs: pass `left` and "
                             "`right` vertex indices, or use pairs='auto'.")
     landmarks = _checked_landmarks(points, left, right, pair_ids, midline, left_weights, right_weights)
     if options["pairs"] == "landmarks+auto":
-        return _auto_symmetrize(points, faces, landmarks, options, progress)
+        return _auto_symmetrize(points, faces, landmarks, options, progress, excluded)
     return _solve(points, *landmarks, options, progress)
 
 
+def _excluded_vertices(auto_excluded, count: int, pairs: str) -> np.ndarray:
+    """``auto_excluded`` (a (count,) bool mask or vertex indices) as vertex indices (k,)."""
+    if auto_excluded is None:
+        return np.zeros(0, dtype=np.int64)
+    if pairs == "landmarks":
+        raise ParameterError("`auto_excluded` keeps vertices out of the automatic pairs, and pairs='landmarks' "
+                             "finds none; use pairs='auto' or 'landmarks+auto', or leave it out.")
+    values = np.asarray(auto_excluded)
+    if values.dtype == bool:
+        if values.shape != (count,):
+            raise ParameterError(f"`auto_excluded` as a mask needs one entry per vertex ({count}), got shape "
+                                 f"{values.shape}.")
+        return np.flatnonzero(values)
+    indices = _integer_indices("auto_excluded", values)
+    outside = (indices < 0) | (indices >= count)
+    if outside.any():
+        raise ParameterError(f"`auto_excluded` holds vertex {indices[outside][0]}, but the mesh has vertices "
+                             f"0..{count - 1}.")
+    return indices
+
+
 def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: dict,
-                    progress) -> SymmetrizationResult:
+                    progress, excluded: np.ndarray) -> SymmetrizationResult:
     """The 'auto' and 'landmarks+auto' modes: rounds of (pair on the current output, solve on
     the input), each kept only if its output is more mirror-symmetric as a surface (RMS
     distance of the vertices to the reflected output, :func:`mirror_distances`), until the
     mirror correspondence stops changing or a round no longer helps.
 
     ``landmarks``: None, or the checked (left, right, ids, midline, wl, wr) of the user's pairs,
-    solved alone first and always kept, weighted ``landmark_priority`` times more. Without
+    solved alone first and always kept, weighted ``landmark_priority`` times more. ``excluded``
+    (k,): vertices (a missing or broken part) that no automatic pair may use, nor pair with. Without
     landmarks the first round tries the candidates of :func:`first_correspondences` in turn,
     rejects those whose pairs are not sound, takes the first that pairs GLOBALLY_SYMMETRIC of
     the vertices at once, or else the one with the most mirror-symmetric output.
@@ -285,7 +308,7 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
     step = 90.0 / (rounds + 2)
     no_index, no_weight = np.zeros(0, dtype=np.int64), np.zeros(0)
     user = (no_index, no_index, no_index, no_index, no_weight, no_weight) if landmarks is None else landmarks
-    fixed = np.concatenate([user[0], user[1], user[3]])
+    fixed = np.concatenate([user[0], user[1], user[3], excluded])  # no automatic pair uses these
     edge_length = mean_spacing(points, faces)
 
     def solved(correspondence, paired_on, start, width):
@@ -379,7 +402,7 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
               "auto_pairs": {"pair_count": int(result.report["pair_count"] - pair_count),
                              "midline_count": int(result.report["midline_count"] - len(user[3])),
                              "rounds": history, "converged": stopped in ("pairs unchanged", "no gain"),
-                             "stopped": stopped}}
+                             "stopped": stopped, "excluded_vertices": int(len(np.unique(excluded)))}}
     if landmarks is None:
         report["auto_pairs"]["first_candidates"] = candidates
         report["auto_pairs"]["surface_plane"] = {"normal": surface_plane[0].tolist(), "offset": surface_plane[1]}
@@ -438,7 +461,8 @@ symmetrize.__signature__ = keyword_signature(
     *(inspect.Parameter(name, inspect.Parameter.POSITIONAL_OR_KEYWORD, default=default)
       for name, default in (("points", inspect.Parameter.empty), ("left", None), ("right", None),
                             ("pair_ids", None), ("midline", None), ("left_weights", None),
-                            ("right_weights", None), ("progress", None), ("faces", None))),
+                            ("right_weights", None), ("progress", None), ("faces", None),
+                            ("auto_excluded", None))),
     adapter=False)
 symmetrize.__doc__ = f"""Symmetrize ``points`` (N, 3) so that each pair (left[k], right[k]) becomes mirror-symmetric.
 
@@ -467,6 +491,10 @@ progress : callable(percent: float, message: str), optional
 faces : (F, 3) int array, optional
     Triangles, used by the automatic pairs (normals, edge length); without
     them the points are treated as a point cloud.
+auto_excluded : (N,) bool array or (k,) int array of vertex indices, optional
+    Vertices no automatic pair may use, nor pair with (a missing or broken
+    part, whose shape must not shape the other side); only with
+    ``pairs='auto'`` or ``'landmarks+auto'``.
 {parameters_doc(adapter=False)}
 
 Returns
