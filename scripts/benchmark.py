@@ -60,13 +60,14 @@ STAGES = ("local_transforms", "global_solve", "warp", "total")
 
 
 def load(path: pathlib.Path):
+    """(exactly symmetric points (N, 3), mirror plane offset, partner (N,), left (n,), right (n,), faces (F, 3))."""
     ms = pymeshlab.MeshSet()
     ms.load_new_mesh(str(path))
     raw = ms.current_mesh().vertex_matrix()
     offset, partner = synthetic.mirror_partners(raw)
     points = synthetic.exactly_symmetric(raw, offset, partner)
     left = np.flatnonzero((partner >= 0) & (points[:, 0] > offset))
-    return points, offset, partner, left, partner[left]
+    return points, offset, partner, left, partner[left], ms.current_mesh().face_matrix()
 
 
 def scenarios(points: np.ndarray, mesh: str):
@@ -280,10 +281,7 @@ def auto_main(args) -> None:
               "auto first pairs", "auto rounds", "s auto", "s landmarks+auto"]
     for mesh in _table_meshes("shape / sym error, % of the diagonal (lower is better); landmarks / auto: ratio of "
                               "their sym errors (the target is 5 or more)", header, args.meshes):
-        points, offset, partner, all_left, all_right = load(MESHES[mesh])
-        ms = pymeshlab.MeshSet()
-        ms.load_new_mesh(str(MESHES[mesh]))
-        faces = ms.current_mesh().face_matrix()
+        points, offset, partner, all_left, all_right, faces = load(MESHES[mesh])
         left, right = synthetic.farthest_point_pairs(points, offset, partner, 100)
         for name, deformed, limb, mode in auto_cases(points, mesh):
             region = slice(None) if limb is None else np.concatenate([limb, partner[limb]])
@@ -319,10 +317,7 @@ def auto_landmark_counts(args) -> None:
     header = ["mesh", "deformation", "mode", *(f"{count} landmarks / +auto" for count in AUTO_LANDMARK_COUNTS)]
     for mesh in _table_meshes("\nsym error, % of the diagonal: landmark pairs alone / the same pairs with "
                               "pairs='landmarks+auto'", header, args.meshes):
-        points, offset, partner, all_left, all_right = load(MESHES[mesh])
-        ms = pymeshlab.MeshSet()
-        ms.load_new_mesh(str(MESHES[mesh]))
-        faces = ms.current_mesh().face_matrix()
+        points, offset, partner, all_left, all_right, faces = load(MESHES[mesh])
         for name, deformed, _, mode in auto_cases(points, mesh):
             deformed = synthetic.random_rigid(deformed, seed=7)
             cells = [mode]
@@ -386,7 +381,7 @@ def main(argv=None) -> None:
     header = ["mesh", "scenario", "pairs", "input", "baseline", *MODES, "s local", "s solve", "s warp", "s total"]
     for mesh in _table_meshes("shape / sym error, % of the diagonal (lower is better); seconds: affine mode, "
                               "median", header, args.meshes):
-        points, offset, partner, all_left, all_right = load(MESHES[mesh])
+        points, offset, partner, all_left, all_right, _ = load(MESHES[mesh])
         for name, deformed, limb in scenarios(points, mesh):
             region = slice(None) if limb is None else np.concatenate([limb, partner[limb]])
             deformed = synthetic.random_rigid(deformed, seed=7)
