@@ -132,7 +132,7 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress) -> SymmetrizationRes
         names = {name: options[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
         pairs, left_weights, right_weights = read_landmark_attributes(mesh, **names)
         result = symmetrize(points, pairs.left, pairs.right, pairs.ids, pairs.midline,
-                            left_weights, right_weights, progress, faces, excluded, **core)
+                            left_weights, right_weights, progress, faces, auto_excluded=excluded, **core)
         left, right = pairs.left, pairs.right
     report = result.report
     if region is not None:
