@@ -269,7 +269,7 @@ def symmetrize(points, left=None, right=None, pair_ids=None, midline=None, left_
 
 
 def _excluded_vertices(auto_excluded, count: int, pairs: str) -> np.ndarray:
-    """``auto_excluded`` (a (count,) bool mask or vertex indices) as vertex indices (k,)."""
+    """``auto_excluded`` (a (count,) bool mask or vertex indices) as distinct vertex indices (k,)."""
     if auto_excluded is None:
         return np.zeros(0, dtype=np.int64)
     if pairs == "landmarks":
@@ -286,7 +286,7 @@ def _excluded_vertices(auto_excluded, count: int, pairs: str) -> np.ndarray:
     if outside.any():
         raise ParameterError(f"`auto_excluded` holds vertex {indices[outside][0]}, but the mesh has vertices "
                              f"0..{count - 1}.")
-    return indices
+    return np.unique(indices)
 
 
 def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: dict,
@@ -402,7 +402,7 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
               "auto_pairs": {"pair_count": int(result.report["pair_count"] - pair_count),
                              "midline_count": int(result.report["midline_count"] - len(user[3])),
                              "rounds": history, "converged": stopped in ("pairs unchanged", "no gain"),
-                             "stopped": stopped, "excluded_vertices": int(len(np.unique(excluded)))}}
+                             "stopped": stopped, "excluded_vertices": int(len(excluded))}}
     if landmarks is None:
         report["auto_pairs"]["first_candidates"] = candidates
         report["auto_pairs"]["surface_plane"] = {"normal": surface_plane[0].tolist(), "offset": surface_plane[1]}

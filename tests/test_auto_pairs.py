@@ -180,10 +180,10 @@ def test_a_missing_region_is_left_out_of_the_automatic_pairs_and_filled_from_the
 
 
 @pytest.mark.parametrize(("excluded", "pairs", "message"), [
-    (np.ones(4, dtype=bool), "auto", r"`auto_excluded` as a mask needs one entry per vertex \(2904\), got shape \(4,\)"),
-    ([5000], "auto", r"`auto_excluded` holds vertex 5000, but the mesh has vertices 0\.\.2903\."),
-    ([-1], "auto", r"`auto_excluded` holds vertex -1"),
-    ([0.5], "auto", r"`auto_excluded` must hold integer vertex indices, got float64 values\."),
+    (np.ones(4, dtype=bool), "landmarks+auto", r"`auto_excluded` as a mask needs one entry per vertex \(2904\), got shape \(4,\)"),
+    ([5000], "landmarks+auto", r"`auto_excluded` holds vertex 5000, but the mesh has vertices 0\.\.2903\."),
+    ([-1], "landmarks+auto", r"`auto_excluded` holds vertex -1"),
+    ([0.5], "landmarks+auto", r"`auto_excluded` must hold integer vertex indices, got float64 values\."),
     ([3], "landmarks", r"`auto_excluded` keeps vertices out of the automatic pairs, and pairs='landmarks' finds none"),
 ])
 def test_bad_exclusions_are_refused_naming_the_fix(cow, excluded, pairs, message):
