@@ -2,8 +2,9 @@
 
 Seeds come from a global mirror plane (vertices whose reflection lands on
 another vertex, mutual nearest neighbours, facing the mirrored way), from the
-plane of the whitened shape (compression, shear), or from the intrinsic mirror
-map of the Laplace-Beltrami eigenfunctions (bends, articulation; see
+plane of the whitened shape (compression, shear), from the reflection registered
+onto the shape (bends, bends with compression; see ``registration``), or from the
+intrinsic mirror map of the Laplace-Beltrami eigenfunctions (articulation; see
 ``spectral``). The correspondence then grows in waves from the seeds: around
 each unpaired vertex, the pairs already found give a local mirror map (an
 affine map fitted to its nearest paired vertices, pulled toward the best
@@ -27,6 +28,7 @@ from scipy.spatial import cKDTree
 from .errors import GeometryError
 from .geometry import MIRROR_X, hemisphere_directions, normalize, proper_rotation_fit, reflection_across_plane, whitening
 from .mesh_geometry import farthest_point_order, mean_spacing, vertex_normals
+from .registration import registered_mirror_map
 from .spectral import intrinsic_mirror_map
 from .surface_symmetry import fit_surface_mirror_plane, promising_normals
 
@@ -281,16 +283,32 @@ def spread_pairs(points: np.ndarray, correspondence: MirrorCorrespondence, count
 
 def intrinsic_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal,
                              plane_offset: float) -> MirrorCorrespondence:
-    """Mirror twins for a bent or articulated mesh: seeds from the intrinsic mirror map
-    (Laplace-Beltrami eigenfunctions, see ``spectral``), kept where the map is its own
-    inverse and agrees with the local mirror map of the neighbouring seeds, then grown
-    as in :func:`mirror_correspondence`. The plane (as there) gives the first guess and
-    tells left from right: a twin lies on the side its partner's gap points from."""
+    """Mirror twins for a bent or articulated mesh, seeded by the intrinsic mirror map
+    (Laplace-Beltrami eigenfunctions, see ``spectral``) started from the plane's map."""
+    initial = cKDTree(points).query(reflection_across_plane(points, normalize(np.asarray(plane_normal, dtype=float)),
+                                                            plane_offset))[1]
+    return mapped_correspondence(points, faces, plane_normal, plane_offset,
+                                 *intrinsic_mirror_map(points, faces, initial))
+
+
+def registered_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal,
+                              plane_offset: float) -> MirrorCorrespondence:
+    """Mirror twins for a bent, compressed or articulated mesh, seeded by registering its
+    reflection onto it (coherent point drift, see ``registration``)."""
+    return mapped_correspondence(points, faces, plane_normal, plane_offset,
+                                 *registered_mirror_map(points, faces, plane_normal, plane_offset))
+
+
+def mapped_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, plane_offset: float,
+                          sample: np.ndarray, twin: np.ndarray, round_trip: np.ndarray) -> MirrorCorrespondence:
+    """Mirror twins grown (as in :func:`mirror_correspondence`) from the twins ``twin`` (S,) that a
+    mirror map gives a sample (S,) of the vertices, kept where the map is its own inverse
+    (``round_trip`` (S,): the twin of the twin) and agrees with the local mirror map of the
+    neighbouring seeds. The plane tells left from right: a twin lies on the side its
+    partner's gap points from."""
     points = np.asarray(points, dtype=float)
     plane_normal = normalize(np.asarray(plane_normal, dtype=float))
     spacing = mean_spacing(points, faces)
-    initial = cKDTree(points).query(reflection_across_plane(points, plane_normal, plane_offset))[1]
-    sample, twin, round_trip = intrinsic_mirror_map(points, faces, initial)
     consistent = np.linalg.norm(points[round_trip] - points[sample], axis=1) < spacing
     sample, twin = sample[consistent], twin[consistent]
     # The eigenfunctions cannot tell a vertex near the midline from its twin a few edges away,
@@ -318,8 +336,10 @@ def first_correspondences(points: np.ndarray, faces: np.ndarray, normal: np.ndar
     ``normal`` (3,), ``offset``: the surface's best mirror plane. Yields (name,
     correspondence or the GeometryError that stopped it): 'mirror plane' (right
     for a shape symmetric up to noise), 'whitened mirror plane' (the same after
-    whitening: right for a uniformly compressed or sheared one) and, for meshes up
-    to ``INTRINSIC_VERTEX_LIMIT`` vertices, 'intrinsic' (bent or articulated ones).
+    whitening: right for a uniformly compressed or sheared one), 'registration'
+    (the reflection registered onto the shape: bent, compressed and bent,
+    articulated) and, for meshes up to ``INTRINSIC_VERTEX_LIMIT`` vertices,
+    'intrinsic' (bent or articulated ones).
     """
     yield "mirror plane", mirror_correspondence(points, faces, normal, offset)
     matrix = whitening(points)
@@ -329,6 +349,10 @@ def first_correspondences(points: np.ndarray, faces: np.ndarray, normal: np.ndar
     starts = promising_normals(white, hemisphere_directions(WHITENED_DIRECTIONS), WHITENED_STARTS)
     white_normal, white_offset = fit_surface_mirror_plane(white, axes=starts)
     yield "whitened mirror plane", mirror_correspondence(white, faces, white_normal, white_offset)
+    try:
+        yield "registration", registered_correspondence(points, faces, normal, offset)
+    except GeometryError as error:
+        yield "registration", error
     if not len(faces):
         yield "intrinsic", GeometryError("the intrinsic candidate needs triangles; this is a point cloud")
     elif len(points) > INTRINSIC_VERTEX_LIMIT:

@@ -1,7 +1,8 @@
-"""Automatic pairs beyond one mirror plane: the intrinsic (Laplace-Beltrami) mirror map for bent and
-articulated shapes, whitening for compressed and sheared ones, and the choice between them."""
+"""Automatic pairs beyond one mirror plane: the reflection registered onto the shape for bent and
+compressed shapes, the intrinsic (Laplace-Beltrami) mirror map for articulated ones, whitening for compressed and sheared ones, and the choice between them."""
 
 import warnings
+from importlib import import_module
 
 import numpy as np
 import pytest
@@ -11,6 +12,7 @@ from filter_symblend import GeometryError, SymblendWarning, symmetrize, syntheti
 from filter_symblend.auto_pairs import WHITENED_DIRECTIONS, WHITENED_STARTS, intrinsic_correspondence
 from filter_symblend.geometry import hemisphere_directions, whitening
 from filter_symblend.mesh_geometry import mean_spacing
+from filter_symblend.registration import registered_mirror_map
 from filter_symblend.spectral import laplace_eigenfunctions
 from filter_symblend.surface_symmetry import fit_surface_mirror_plane, promising_normals
 
@@ -85,27 +87,77 @@ def test_the_intrinsic_map_pairs_a_strongly_bent_shape_where_one_plane_cannot(co
     assert np.mean(np.sign(cow.points[left, 0] - cow.offset) > 0) > 0.95
 
 
-# Largest ratio of the automatic symmetry error to that of 100 landmark pairs, measured:
-# articulated 0.99 (the limb stays a third unpaired), bend 0.2 rad 0.06 (the issue's 1/5).
-@pytest.mark.parametrize(("scenario", "ratio"), [("articulated", 1.1), ("bend 0.2 rad", 0.2)])
-def test_bent_and_articulated_shapes_need_no_landmarks(cow, scenario, ratio):
-    """Without landmarks, the intrinsic pairs symmetrize as well as 100 hand-placed pairs, or
-    (a mild bend) five times better."""
-    weights = synthetic.limb_weights(cow.points, **synthetic.LIMBS["cow"])
-    deform = {"articulated": lambda p: synthetic.articulate_limb(p, weights, 0.6),
-              "bend 0.2 rad": lambda p: synthetic.bend(p, 0.2)}[scenario]
-    deformed = synthetic.random_rigid(deform(cow.points), seed=7)
+def _sym_errors(cow, deformed, mode="affine"):
+    """Symmetry error over all vertex pairs of the input, of 100 landmark pairs and of pairs='auto',
+    the shape error of the last two, and the auto result."""
     left, right = cow.landmarks(100)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SymblendWarning)
-        landmarks = symmetrize(deformed, left, right, mode="affine")
-    automatic = symmetrize(deformed, faces=cow.faces, pairs="auto", mode="affine")
+        landmarks = symmetrize(deformed, left, right, mode=mode)
+    automatic = symmetrize(deformed, faces=cow.faces, pairs="auto", mode=mode)
     errors = [synthetic.symmetry_error(p, cow.all_left, cow.all_right) for p in
               (deformed, landmarks.points, automatic.points)]
-    print(scenario, "symmetry error, input / 100 landmarks / auto:", errors)
+    shapes = [synthetic.shape_error(p, cow.points) for p in (landmarks.points, automatic.points)]
+    return errors, shapes, automatic
+
+
+# Largest ratio of the automatic symmetry error to that of 100 landmark pairs: articulated 0.99 measured
+# (the limb stays a third unpaired).
+def test_an_articulated_shape_needs_no_landmarks(cow):
+    """Without landmarks, the intrinsic pairs symmetrize a limb swung by 0.6 rad as well as 100 hand-placed pairs."""
+    weights = synthetic.limb_weights(cow.points, **synthetic.LIMBS["cow"])
+    deformed = synthetic.random_rigid(synthetic.articulate_limb(cow.points, weights, 0.6), seed=7)
+    errors, _, automatic = _sym_errors(cow, deformed)
+    print("symmetry error, input / 100 landmarks / auto:", errors)
     assert automatic.report["auto_pairs"]["rounds"][0]["first_pairs"] == "intrinsic"
-    assert errors[2] < errors[0] / 5  # measured 7x (articulated), 500x (bend)
-    assert errors[2] < ratio * errors[1]
+    assert errors[2] < errors[0] / 5  # measured 7x
+    assert errors[2] < 1.1 * errors[1]
+
+
+# The issue's target: at most 1/5 of the symmetry error of 100 landmark pairs, shape no worse. Measured
+# (100 landmarks -> auto, % of the diagonal): bend 0.2 rad 0.036 -> 0.0026, bend 0.6 rad 0.107 -> 0.0075,
+# bend 1.2 rad 0.207 -> 0.0145, bend 0.2 rad + compression 0.9 0.036 -> 0.0026.
+@pytest.mark.parametrize(("angle", "factor"), [(0.2, 1.0), (0.6, 1.0), (1.2, 1.0), (0.2, 0.9)])
+def test_bent_and_compressed_shapes_need_no_landmarks(cow, angle, factor):
+    """Registered onto its reflection, a bent (and compressed) cow is symmetrized five times better
+    than with 100 hand-placed pairs, and its shape restored at least as well."""
+    deformed = synthetic.bend(cow.points, angle)
+    if factor != 1.0:
+        deformed = synthetic.compress(deformed, [1, 1, 0], factor, shear=0.05)
+    errors, shapes, automatic = _sym_errors(cow, synthetic.random_rigid(deformed, seed=7))
+    print(f"bend {angle}, compression {factor}: symmetry error, input / 100 landmarks / auto:", errors,
+          "shape error, 100 landmarks / auto:", shapes)
+    assert automatic.report["auto_pairs"]["rounds"][0]["first_pairs"] == "registration"
+    assert errors[2] < errors[1] / 5
+    assert shapes[1] <= shapes[0]
+
+
+def test_registration_pairs_every_sampled_vertex_of_a_bent_cow_with_its_true_twin(cow):
+    bent = synthetic.random_rigid(synthetic.bend(cow.points, 0.6), seed=4)
+    sample, twin, round_trip = registered_mirror_map(bent, cow.faces, *fit_surface_mirror_plane(bent))
+    partner = np.full(len(cow.points), -1)
+    partner[cow.all_left], partner[cow.all_right] = cow.all_right, cow.all_left
+    known = partner[sample] >= 0
+    assert len(sample) == 2000
+    assert np.mean(twin[known] == partner[sample][known]) > 0.99  # measured 1.0 (one plane: 0.1)
+    assert np.mean(round_trip == sample) > 0.95  # measured 0.99
+
+
+def test_without_the_normal_term_registration_undoes_the_reflection(cow, monkeypatch):
+    """The smoothest field that moves the reflection of a strongly bent cow onto it is the one that
+    undoes the reflection, every vertex its own twin; the normals rule it out."""
+    from filter_symblend import registration
+    bent = synthetic.random_rigid(synthetic.bend(cow.points, 1.2), seed=7)
+    plane = fit_surface_mirror_plane(bent)
+    sample, twin, _ = registered_mirror_map(bent, cow.faces, *plane)
+    monkeypatch.setattr(registration, "NORMAL_WEIGHT", 0.0)
+    _, blind_twin, _ = registered_mirror_map(bent, cow.faces, *plane)
+    partner = np.full(len(cow.points), -1)
+    partner[cow.all_left], partner[cow.all_right] = cow.all_right, cow.all_left
+    apart = (partner[sample] >= 0) & (np.linalg.norm(bent[sample] - bent[partner[sample]], axis=1)
+                                      > 3 * mean_spacing(bent, cow.faces))  # true twin 3 edges away or more
+    assert np.mean(twin[apart] == partner[sample][apart]) > 0.95  # measured 0.98
+    assert np.mean(blind_twin[apart] == sample[apart]) > 0.9  # its own twin; measured 1.0
 
 
 def test_a_compressed_and_sheared_shape_is_restored_exactly_without_landmarks(cow):
@@ -123,7 +175,6 @@ def test_rounds_that_do_not_make_the_surface_more_symmetric_are_not_kept(cow):
     rounds = result.report["auto_pairs"]["rounds"]
     kept = [entry["surface_asymmetry"] for entry in rounds if entry.get("kept", True) and "pairs" in entry]
     assert kept == sorted(kept, reverse=True)
-    from importlib import import_module
     assert import_module("filter_symblend.symmetrize")._surface_asymmetry(result, cow.faces) == kept[-1]
     if result.report["auto_pairs"]["stopped"] == "no gain":
         assert rounds[-1]["kept"] is False and rounds[-1]["surface_asymmetry"] >= kept[-1]
@@ -134,21 +185,25 @@ def test_a_shape_no_candidate_can_pair_is_refused_naming_each_candidate(cow):
     symmetrizing with their pairs made the cow less symmetric, so it is refused."""
     deformed = synthetic.random_rigid(synthetic.figure_1_deformation(cow.points), seed=7)
     with pytest.raises(GeometryError, match=r"no usable mirror pairs \(mirror plane: rejected: it pairs \d+% of the "
-                       r"vertices, fewer than 20%; whitened mirror plane: rejected: .*; intrinsic: rejected: .*\)\. "
+                       r"vertices, fewer than 20%; whitened mirror plane: rejected: .*; registration: rejected: .*; "
+                       r"intrinsic: rejected: .*\)\. "
                        r"The shape may be too far .* use pairs='landmarks\+auto'\."):
         symmetrize(deformed, faces=cow.faces, pairs="auto", mode="affine")
 
 
-def test_a_point_cloud_skips_the_intrinsic_candidate_and_says_why(cow):
+def test_a_point_cloud_skips_the_registration_and_intrinsic_candidates_and_says_why(cow):
     bent = synthetic.bend(cow.points, 0.2)
     result = symmetrize(bent, pairs="auto", mode="affine")
-    reason = result.report["auto_pairs"]["first_candidates"]["intrinsic"]
-    assert reason == "the intrinsic candidate needs triangles; this is a point cloud"
+    candidates = result.report["auto_pairs"]["first_candidates"]
+    assert candidates["registration"] == ("the registration candidate needs triangles (oriented normals); "
+                                          "this is a point cloud")
+    assert candidates["intrinsic"] == "the intrinsic candidate needs triangles; this is a point cloud"
 
 
 def test_a_mesh_above_the_size_limit_skips_the_intrinsic_candidate_and_says_why(cow, monkeypatch):
     from filter_symblend import auto_pairs
     monkeypatch.setattr(auto_pairs, "INTRINSIC_VERTEX_LIMIT", 1000)
+    monkeypatch.setattr(import_module("filter_symblend.symmetrize"), "GLOBALLY_SYMMETRIC", 1.1)  # try every source
     result = symmetrize(synthetic.bend(cow.points, 0.2), faces=cow.faces, pairs="auto")
     assert result.report["auto_pairs"]["first_candidates"]["intrinsic"] == (
         "skipped: the mesh has 2,904 vertices, the intrinsic candidate is tried up to 1,000")
@@ -163,14 +218,13 @@ def test_a_failed_eigenproblem_drops_the_intrinsic_candidate_with_its_reason(cow
         raise ArpackNoConvergence("No convergence", np.zeros(0), np.zeros((0, 0)))
 
     monkeypatch.setattr(spectral, "eigsh", no_convergence)
+    monkeypatch.setattr(import_module("filter_symblend.symmetrize"), "GLOBALLY_SYMMETRIC", 1.1)  # try every source
     result = symmetrize(synthetic.bend(cow.points, 0.2), faces=cow.faces, pairs="auto")
     assert result.report["auto_pairs"]["first_candidates"]["intrinsic"] == (
         "the Laplace-Beltrami eigenproblem failed (ARPACK error -1: No convergence)")
 
 
 def test_a_later_round_that_finds_too_few_pairs_keeps_the_last_good_result(cow, monkeypatch):
-    from importlib import import_module
-
     from filter_symblend.auto_pairs import MirrorCorrespondence
     module = import_module("filter_symblend.symmetrize")
     bent = synthetic.bend(cow.points, 0.2)
