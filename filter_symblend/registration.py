@@ -112,9 +112,10 @@ def registered_mirror_map(points: np.ndarray, faces: np.ndarray, plane_normal, p
     pool = np.arange(0, len(points), max(1, len(points) // POOL))
     sample = np.sort(pool[farthest_point_order(points[pool], min(SAMPLES, len(pool)))])
     mirrored_normals = normals - 2.0 * np.outer(normals @ plane_normal, plane_normal)
-    field = coherent_point_drift(points[sample], reflection_across_plane(points[sample], plane_normal, plane_offset),
-                                 normals[sample], mirrored_normals[sample], MIN_DEVIATION * mean_spacing(points, faces))
+    mirrored = reflection_across_plane(points[sample], plane_normal, plane_offset)
+    field = coherent_point_drift(points[sample], mirrored, normals[sample], mirrored_normals[sample],
+                                 MIN_DEVIATION * mean_spacing(points, faces))
     vertices = cKDTree(points)
-    twin = vertices.query(field(reflection_across_plane(points[sample], plane_normal, plane_offset)))[1]
+    twin = vertices.query(field(mirrored))[1]
     round_trip = vertices.query(field(reflection_across_plane(points[twin], plane_normal, plane_offset)))[1]
     return sample, twin, round_trip
