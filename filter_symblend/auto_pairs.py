@@ -311,9 +311,9 @@ def mapped_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, p
     spacing = mean_spacing(points, faces)
     consistent = np.linalg.norm(points[round_trip] - points[sample], axis=1) < spacing
     sample, twin = sample[consistent], twin[consistent]
-    # The eigenfunctions cannot tell a vertex near the midline from its twin a few edges away,
-    # so the map's pairs that short (and its midline points) are not used: the growth finds
-    # them from the pairs around.
+    # A map's pairs this short (and its midline points) are not used; the growth finds them from
+    # the pairs around. The eigenfunctions cannot tell a vertex near the midline from its twin a
+    # few edges away; the registration's pairs are kept to the same rule.
     far = np.linalg.norm(points[twin] - points[sample], axis=1) > SHORT_PAIR * spacing
     sample, twin = sample[far], twin[far]
     leftward = (points[sample] - points[twin]) @ plane_normal > 0
