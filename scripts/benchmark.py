@@ -297,6 +297,8 @@ def auto_main(args) -> None:
             landmark_error = synthetic.symmetry_error(landmarks.points, all_left, all_right)
             if automatic is None or landmark_error < EXACT:
                 cells.append("-")  # refused, or the landmarks are exact already
+            elif synthetic.symmetry_error(automatic.points, all_left, all_right) < EXACT:
+                cells.append("auto exact")  # every vertex paired with its true twin: no finite ratio
             else:
                 cells.append(f"{landmark_error / synthetic.symmetry_error(automatic.points, all_left, all_right):.1f}")
             cells.append(errors(hybrid.points, points, all_left, all_right, region))
