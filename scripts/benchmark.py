@@ -295,12 +295,13 @@ def auto_main(args) -> None:
             cells = [mode] + [errors(out, points, all_left, all_right, region) if out is not None else "refused"
                               for out in (deformed, landmarks.points, automatic and automatic.points)]
             landmark_error = synthetic.symmetry_error(landmarks.points, all_left, all_right)
+            auto_error = None if automatic is None else synthetic.symmetry_error(automatic.points, all_left, all_right)
             if automatic is None or landmark_error < EXACT:
                 cells.append("-")  # refused, or the landmarks are exact already
-            elif synthetic.symmetry_error(automatic.points, all_left, all_right) < EXACT:
+            elif auto_error < EXACT:
                 cells.append("auto exact")  # every vertex paired with its true twin: no finite ratio
             else:
-                cells.append(f"{landmark_error / synthetic.symmetry_error(automatic.points, all_left, all_right):.1f}")
+                cells.append(f"{landmark_error / auto_error:.1f}")
             cells.append(errors(hybrid.points, points, all_left, all_right, region))
             if automatic is None:
                 cells += ["-", "-", "-"]
