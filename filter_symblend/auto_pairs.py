@@ -123,7 +123,7 @@ def _seed(points, normals, oriented, tree, spacing, plane_normal, plane_offset):
         return np.full(n, -1), np.zeros(n, dtype=np.int8), MIN_MATCH_DISTANCE * spacing
     tolerance = spacing * np.clip(2.0 * np.median(distance[mutual]) / spacing,
                                   MIN_MATCH_DISTANCE, MAX_MATCH_DISTANCE)
-    mirrored_normals = normals - 2.0 * np.outer(normals @ plane_normal, plane_normal)
+    mirrored_normals = reflection_across_plane(normals, plane_normal, 0.0)  # directions: through the origin
     good = (mutual & (distance < np.where(nearest == index, MIDLINE_DISTANCE * spacing, tolerance))
             & (_agreement(mirrored_normals, normals[nearest], oriented) > SEED_COSINE))
     partner = np.where(good, nearest, -1)

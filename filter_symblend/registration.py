@@ -115,9 +115,9 @@ def registered_mirror_map(points: np.ndarray, faces: np.ndarray, plane_normal, p
     normals, _ = vertex_normals(points, faces)
     pool = np.arange(0, len(points), max(1, len(points) // POOL))
     sample = np.sort(pool[farthest_point_order(points[pool], min(SAMPLES, len(pool)))])
-    mirrored_normals = normals - 2.0 * np.outer(normals @ plane_normal, plane_normal)
     mirrored = reflection_across_plane(points[sample], plane_normal, plane_offset)
-    field = coherent_point_drift(points[sample], mirrored, normals[sample], mirrored_normals[sample],
+    mirrored_normals = reflection_across_plane(normals[sample], plane_normal, 0.0)  # directions: through the origin
+    field = coherent_point_drift(points[sample], mirrored, normals[sample], mirrored_normals,
                                  MIN_DEVIATION * mean_spacing(points, faces))
     vertices = cKDTree(points)
     twin = vertices.query(field(mirrored))[1]
