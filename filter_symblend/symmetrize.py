@@ -322,6 +322,7 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
                                              _scaled_progress(progress, start, width))
         entry = {"pairs": int(len(left)), "midline": int(len(midline)),
                  "paired_vertices": float(correspondence.paired_fraction),
+                 "grown_vertices": correspondence.grown_fraction,
                  "growth_waves": correspondence.waves, "surface_asymmetry": _surface_asymmetry(result, faces),
                  "local_fit_residual": result.report["local_fit_residual"]["median"]}
         return result, entry
@@ -351,7 +352,7 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
                                                             "paired_vertices")}
             at_once = entry["paired_vertices"] >= GLOBALLY_SYMMETRIC
             if at_once or best is None or entry["surface_asymmetry"] < best[1]["surface_asymmetry"]:
-                best = result, {**entry, "first_pairs": name}, correspondence.partner
+                best = result, {**entry, "first_pairs": name}, correspondence.partner, correspondence.exact_twins
             if at_once:
                 break
         if best is None:
@@ -360,11 +361,12 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
                 + "; ".join(f"{name}: {reason}" for name, reason in candidates.items())
                 + "). The shape may be too far from mirror-symmetric for automatic pairs: place a few "
                 "landmark pairs and use pairs='landmarks+auto'.")
-        result, entry, previous = best
+        result, entry, previous, exact_twins = best
         first_round, slots = 1, 2
     else:
         result = _solve(points, *landmarks, options, _scaled_progress(progress, 5.0, step))
         entry, previous = {"landmarks_only": True, "surface_asymmetry": _surface_asymmetry(result, faces)}, None
+        exact_twins = None  # decided by the first pairing, on the landmarks' output
         first_round, slots = 0, 1
     history.append(entry)
     stopped = "round limit"
@@ -372,8 +374,13 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
         start = 5.0 + (round_index + slots) * step
         _report_progress(progress, start, f"automatic pairs, round {round_index + 1}")
         current = result.points
+        # Whether the twins are exact is decided on the first pairing, not on an output: an output is
+        # exactly symmetric at its pairs even where the input's two sides are tessellated differently.
         correspondence = mirror_correspondence(current, faces, np.asarray(result.report["plane_normal"]),
-                                               result.report["plane_offset"], (user[0], user[1]), user[3])
+                                               result.report["plane_offset"], (user[0], user[1]), user[3],
+                                               complete=exact_twins)
+        if exact_twins is None:
+            exact_twins = correspondence.exact_twins
         partner = correspondence.partner
         change = {} if previous is None else {
             "changed_vertices": float(np.mean(partner != previous)),
@@ -402,6 +409,7 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
               "auto_pairs": {"pair_count": int(result.report["pair_count"] - pair_count),
                              "midline_count": int(result.report["midline_count"] - len(user[3])),
                              "rounds": history, "converged": stopped in ("pairs unchanged", "no gain"),
+                             "exact_twins": bool(exact_twins),
                              "stopped": stopped, "excluded_vertices": int(len(excluded))}}
     if landmarks is None:
         report["auto_pairs"]["first_candidates"] = candidates

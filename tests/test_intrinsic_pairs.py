@@ -101,17 +101,18 @@ def _sym_errors(cow, deformed, mode="affine"):
     return errors, shapes, automatic
 
 
-# Largest ratio of the automatic symmetry error to that of 100 landmark pairs: articulated 0.99 measured
-# (the limb stays a third unpaired).
+# Measured: 0.248 % against 0.367 % for 100 landmark pairs (the target's 5x is not met here: the joint's
+# twins are predicted an edge or more off, and the completion gets some wrong; 0.365 % before it).
 def test_an_articulated_shape_needs_no_landmarks(cow):
-    """Without landmarks, the intrinsic pairs symmetrize a limb swung by 0.6 rad as well as 100 hand-placed pairs."""
+    """Without landmarks, the intrinsic pairs symmetrize a limb swung by 0.6 rad at least as well as 100
+    hand-placed pairs."""
     weights = synthetic.limb_weights(cow.points, **synthetic.LIMBS["cow"])
     deformed = synthetic.random_rigid(synthetic.articulate_limb(cow.points, weights, 0.6), seed=7)
     errors, _, automatic = _sym_errors(cow, deformed)
     print("symmetry error, input / 100 landmarks / auto:", errors)
     assert automatic.report["auto_pairs"]["rounds"][0]["first_pairs"] == "intrinsic"
-    assert errors[2] < errors[0] / 5  # measured 7x
-    assert errors[2] < 1.1 * errors[1]
+    assert errors[2] < errors[0] / 5  # measured 11x
+    assert errors[2] < errors[1]  # measured 1.5x
 
 
 # The issue's target: at most 1/5 of the symmetry error of 100 landmark pairs, shape no worse. Measured
@@ -244,7 +245,7 @@ def test_a_later_round_that_finds_too_few_pairs_keeps_the_last_good_result(cow, 
     module = import_module("filter_symblend.symmetrize")
     bent = synthetic.bend(cow.points, 0.2)
     first = symmetrize(bent, faces=cow.faces, pairs="auto", auto_iterations=1)
-    monkeypatch.setattr(module, "mirror_correspondence", lambda points, *args: MirrorCorrespondence(
+    monkeypatch.setattr(module, "mirror_correspondence", lambda points, *args, **kwargs: MirrorCorrespondence(
         np.full(len(points), -1), np.zeros(len(points), dtype=np.int8), 0, 0))
     result = symmetrize(bent, faces=cow.faces, pairs="auto")
     auto = result.report["auto_pairs"]
