@@ -19,6 +19,9 @@ import scipy.sparse as sparse
 # twins' rings. With the true twins: spot 94 % (its midline strip is tessellated one way only),
 # pymeshlab's cow 19 % (its quads are split along mirrored diagonals on only part of it).
 MIRRORED_RINGS = 0.8
+# An unpaired vertex gets a twin from at least this many paired neighbours: with one, every unpaired
+# neighbour of that neighbour's twin would fit.
+LEAST_PAIRED_NEIGHBOURS = 2
 
 
 def vertex_adjacency(faces: np.ndarray, count: int) -> sparse.csr_matrix:
@@ -63,12 +66,13 @@ def mirrored_tessellation(adjacency: sparse.csr_matrix, partner: np.ndarray) -> 
     return bool(closed.any()) and float(np.mean(ring_consistent(adjacency, partner)[closed])) >= MIRRORED_RINGS
 
 
-def connectivity_twins(adjacency: sparse.csr_matrix, partner: np.ndarray, least: int = 2):
+def connectivity_twins(adjacency: sparse.csr_matrix, partner: np.ndarray):
     """Twins the connectivity implies for unpaired vertices: (sources (k,), twins (k,)).
 
-    A source is an unpaired vertex with at least ``least`` paired neighbours, and its twin the
-    one unpaired vertex adjacent to all of their twins (the source itself if they are its own
-    neighbours: a midline vertex); kept only where the twin's own candidate is the source.
+    A source is an unpaired vertex with LEAST_PAIRED_NEIGHBOURS paired neighbours or more, and
+    its twin the one unpaired vertex adjacent to all of their twins (the source itself if they
+    are its own neighbours: a midline vertex); kept only where the twin's own candidate is the
+    source.
     """
     n = len(partner)
     source, neighbour = _edges(adjacency)
@@ -78,7 +82,7 @@ def connectivity_twins(adjacency: sparse.csr_matrix, partner: np.ndarray, least:
     counts = np.asarray(known.sum(axis=1)).ravel()
     # reach[u, v]: how many twins of u's paired neighbours are adjacent to v.
     reach = (known @ adjacency).tocoo()
-    fits = (reach.data == counts[reach.row]) & (counts[reach.row] >= least) & (partner[reach.col] < 0)
+    fits = (reach.data == counts[reach.row]) & (counts[reach.row] >= LEAST_PAIRED_NEIGHBOURS) & (partner[reach.col] < 0)
     rows, columns = reach.row[fits], reach.col[fits]
     unique = np.bincount(rows, minlength=n) == 1
     keep = unique[rows]

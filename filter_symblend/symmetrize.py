@@ -301,7 +301,9 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
     (k,): vertices (a missing or broken part) that no automatic pair may use, nor pair with. Without
     landmarks the first round tries the candidates of :func:`first_correspondences` in turn,
     rejects those whose pairs are not sound, takes the first that pairs GLOBALLY_SYMMETRIC of
-    the vertices at once, or else the one with the most mirror-symmetric output.
+    the vertices at once, or else the one with the most mirror-symmetric output. Where the first
+    pairing says the two sides' vertices mirror each other (``exact_twins``), the later rounds
+    pair the vertices the growth leaves by an assignment (see ``auto_pairs``).
     """
     clock = time.perf_counter()
     rounds = options["auto_iterations"]
