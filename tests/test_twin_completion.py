@@ -13,9 +13,9 @@ from filter_symblend.twin_assignment import assigned_twins
 from test_auto_pairs import symmetric_blob, twins
 
 
-def mirrored_grids(count: int = 10, spacing: float = 1.0):
-    """Two square grids of count x count points, at x = +5 and its mirror image x = -5: (points, twin)."""
-    y, z = np.meshgrid(np.arange(count) * spacing, np.arange(count) * spacing)
+def mirrored_grids(count: int = 10):
+    """Two square grids of count x count points 1 apart, at x = +5 and its mirror image x = -5: (points, twin)."""
+    y, z = np.meshgrid(np.arange(count, dtype=float), np.arange(count, dtype=float))
     left = np.column_stack([np.full(y.size, 5.0), y.ravel(), z.ravel()])
     points = np.vstack([left, left * [-1.0, 1.0, 1.0]])
     n = len(left)
