@@ -10,8 +10,10 @@ each unpaired vertex, the pairs already found give a local mirror map (an
 affine map fitted to its nearest paired vertices, pulled toward the best
 improper rigid map), which predicts where the vertex's twin lies. The nearest
 vertex there is accepted if it is close to the prediction, faces the mirrored
-way, and predicts the vertex back. Where that stalls and the tessellation mirrors
-itself, the twins the connectivity implies are taken (see ``mesh_twins``). Then
+way, and predicts the vertex back. Where that stalls on a mesh whose tessellation
+mirrors itself, its own mirror map, grown by the connectivity alone from one right
+pair among the seeds, replaces the pairs (a strong bend leaves most seeds slid by a
+row; see ``mesh_twins``), and the twins the connectivity implies are taken. Then
 pairs that the local maps of their neighbours do not confirm are dropped: one
 wrong pair, forced symmetric by the solve, distorts its whole neighbourhood.
 Last, on a mesh whose two sides' vertices mirror each other, the vertices still
@@ -34,7 +36,8 @@ from .errors import GeometryError
 from .geometry import MIRROR_X, hemisphere_directions, normalize, proper_rotation_fit, reflection_across_plane, whitening
 from .mesh_geometry import farthest_point_order, mean_spacing, vertex_normals
 from .twin_assignment import assigned_twins
-from .mesh_twins import connectivity_twins, mirrored_tessellation, ring_consistent, vertex_adjacency
+from .mesh_twins import (connectivity_twins, mirrored_tessellation, ring_consistent, single_pairs,
+                         tessellation_mirror, vertex_adjacency)
 from .registration import registered_mirror_map
 from .spectral import intrinsic_mirror_map
 from .surface_symmetry import fit_surface_mirror_plane, promising_normals
@@ -64,8 +67,9 @@ NEIGHBOURS = 12  # paired vertices fitting each local mirror map
 # The completion of the correspondence by assignment (``_complete_by_assignment``), for meshes whose
 # two sides' vertices mirror each other:
 # x spacing: the pairs say so when their median misfit is below this. Measured (edges): the cow and
-# spot, symmetric, bent or with a limb swung, 0-0.004; pairs that are wrong in places (spot bent
-# 1.2 rad, Figure 1) 0.18-0.33; the Igea scan 0.31.
+# spot, symmetric, bent up to 0.6 rad or with a limb swung, 0-0.004; pairs that are wrong in places
+# 0.18-0.33; the Igea scan 0.31. Right pairs of spot bent 1.2 rad: about 0.05 after the whitening, where the
+# local affine maps follow the bend less well (there the tessellation says so instead).
 VERTEX_EXACT_MISFIT = 0.05
 # x spacing: a vertex's candidate twins lie within this of its predicted twin. Completing the intrinsic
 # pairs of the cow with a limb swung 0.6 rad (the growth's local maps predicting), 1.5 left 88
@@ -138,8 +142,10 @@ class MirrorCorrespondence:
     seeds: number of vertices paired by the global plane (both sides and midline).
     waves: number of growth waves.
     exact_twins: whether the pairs say the two sides' vertices mirror each other (median misfit
-    below VERTEX_EXACT_MISFIT, see ``_misfits``).
+    below VERTEX_EXACT_MISFIT, see ``_misfits``; or ``tessellated``).
     assigned: number of vertices paired by ``_complete_by_assignment`` after the growth.
+    tessellated: whether the pairs are the mesh's own mirror map, read off its connectivity
+    (``mesh_twins.tessellation_mirror``).
     """
 
     partner: np.ndarray
@@ -148,6 +154,7 @@ class MirrorCorrespondence:
     waves: int
     exact_twins: bool = False
     assigned: int = 0
+    tessellated: bool = False
 
     @property
     def paired_fraction(self) -> float:
@@ -215,19 +222,6 @@ def _predict(points, normals, partner, sources, paired_tree, paired):
     return predicted, np.einsum("nij,nj->ni", rigid, normals[sources]), neighbours
 
 
-def _single_pairs(count, sources, twin, votes):
-    """The pairs (sources, twin, votes) with each vertex in one pair only: a pair found from both
-    of its ends counts once, a vertex in two different pairs waits for the next wave. None if none."""
-    low, high = np.minimum(sources, twin), np.maximum(sources, twin)
-    _, first = np.unique(low * count + high, return_index=True)
-    sources, twin, votes = sources[first], twin[first], votes[first]
-    uses = np.bincount(np.concatenate([sources, twin[twin != sources]]), minlength=count)
-    single = (uses[sources] == 1) & (uses[twin] == 1)
-    if not single.any():
-        return None
-    return sources[single], twin[single], votes[single]
-
-
 def _geometric_wave(points, normals, oriented, tree, spacing, tolerance, partner, side, added, paired_tree, paired):
     """New pairs (sources, twins, sides of the sources) near the pairs ``added`` last, where the local
     mirror map predicts a twin within ``tolerance``; None if none."""
@@ -255,7 +249,7 @@ def _geometric_wave(points, normals, oriented, tree, spacing, tolerance, partner
     # A vertex that is its own twin is on the midline; the others claim sides from their neighbours.
     votes = np.sign(side[neighbours].sum(axis=1)).astype(np.int8)
     keep = (twin == sources) | (votes != 0)
-    return _single_pairs(len(points), sources[keep], twin[keep], votes[keep])
+    return single_pairs(len(points), sources[keep], twin[keep], votes[keep])
 
 
 def _connectivity_wave(points, normals, oriented, spacing, adjacency, partner, side, paired_tree, paired):
@@ -270,7 +264,7 @@ def _connectivity_wave(points, normals, oriented, spacing, adjacency, partner, s
     facing = (twin == sources) | (_agreement(mapped_normals, normals[twin], oriented) > MATCH_COSINE)
     votes = np.sign(side[neighbours].sum(axis=1)).astype(np.int8)
     keep = close & facing & ((twin == sources) | (votes != 0))
-    return _single_pairs(len(points), sources[keep], twin[keep], votes[keep])
+    return single_pairs(len(points), sources[keep], twin[keep], votes[keep])
 
 
 def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, plane_offset: float,
@@ -285,13 +279,15 @@ def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, p
     (left (n,), right (n,)) and ``fixed_midline`` (m,): vertex indices of known pairs
     (the user's landmarks), seeded as given and always kept. ``seed_pairs`` (left (k,),
     right (k,)): seeds found otherwise (e.g. by the intrinsic map), used instead of the
-    plane's (the plane still sets the acceptance distance). At the end, pairs that
+    plane's (the plane still sets the acceptance distance). When the geometric growth stalls,
+    the tessellation's own mirror map grown from a seed (``mesh_twins.tessellation_mirror``)
+    replaces the pairs if there is one, and the landmarks are held. At the end, pairs that
     disagree with the local mirror map of their neighbours are dropped (see ``OUTLIER``),
     unless their rings map onto their twins' on a tessellation that mirrors itself. Then, if
-    ``complete`` (None: if the pairs' median misfit says the two sides' vertices mirror each
-    other, ``exact_twins``; but a symmetrized output's say so at its pairs whatever the input,
-    so later rounds pass the first round's answer), the vertices left are paired by
-    ``_complete_by_assignment``.
+    ``complete`` (None: if the pairs' median misfit or the tessellation says the two sides'
+    vertices mirror each other, ``exact_twins``; but a symmetrized output's pairs say so
+    whatever the input, so later rounds pass the first round's answer), the vertices left are
+    paired by ``_complete_by_assignment``.
     """
     points = np.asarray(points, dtype=float)
     plane_normal = normalize(np.asarray(plane_normal, dtype=float))
@@ -303,29 +299,46 @@ def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, p
         partner[:], side[:] = -1, 0
         partner[seed_pairs[0]], partner[seed_pairs[1]] = seed_pairs[1], seed_pairs[0]
         side[seed_pairs[0]], side[seed_pairs[1]] = 1, -1
-    fixed = np.zeros(len(points), dtype=bool)
-    if fixed_pairs is not None:
-        left, right = fixed_pairs
-        stale = np.isin(partner, np.concatenate([left, right]))  # vertices seeded onto a landmark
-        partner[stale], side[stale] = -1, 0
-        partner[left], partner[right] = right, left
-        side[left], side[right] = 1, -1
-        fixed[left] = fixed[right] = True
-    if fixed_midline is not None:
-        partner[fixed_midline], side[fixed_midline] = fixed_midline, 0
-        fixed[fixed_midline] = True
     seeds = int(np.count_nonzero(partner >= 0))
+    no_vertex = np.zeros(0, dtype=np.int64)
+    left, right = (no_vertex, no_vertex) if fixed_pairs is None else fixed_pairs
+    midline = no_vertex if fixed_midline is None else fixed_midline
+    fixed = np.zeros(len(points), dtype=bool)
+    fixed[np.concatenate([left, right, midline]).astype(np.int64)] = True
+
+    def hold_landmarks(partner, side):
+        """The user's pairs imposed on ``partner``, ``side`` (in place); a vertex paired with a landmark
+        vertex otherwise loses its twin."""
+        stale = np.isin(partner, np.flatnonzero(fixed))
+        partner[stale], side[stale] = -1, 0
+        partner[left], partner[right], partner[midline] = right, left, midline
+        side[left], side[right], side[midline] = 1, -1, 0
+
+    hold_landmarks(partner, side)
     adjacency = vertex_adjacency(faces, len(points)) if len(faces) else None
     waves = 0
     mirrored = None  # whether the tessellation mirrors itself: decided once the geometric growth stalls
+    tessellated = False  # whether the pairs are the tessellation's own mirror map
     added = np.flatnonzero(partner >= 0)
-    while seeds >= 4:
+    while np.count_nonzero(partner >= 0) >= 4:
         paired = np.flatnonzero(partner >= 0)
         paired_tree = cKDTree(points[paired])
         found = _geometric_wave(points, normals, oriented, tree, spacing, tolerance, partner, side, added,
                                 paired_tree, paired)
         if found is None and adjacency is not None and mirrored is None:
-            mirrored = mirrored_tessellation(adjacency, partner)
+            mirror = tessellation_mirror(adjacency, partner, side)
+            mirrored = mirror is not None or mirrored_tessellation(adjacency, partner)
+            if mirror is not None:  # the tessellation's own mirror map, from a right pair: it replaces the rest
+                partner, side = mirror
+                # Its pairs next to where the tessellation stops mirroring (spot's midline strip) can be
+                # wrong; the geometric growth pairs them from the rings that map whole.
+                open_ring = ~ring_consistent(adjacency, partner)
+                open_ring |= open_ring[np.maximum(partner, 0)] & (partner >= 0)  # both ends of a pair
+                partner[open_ring], side[open_ring] = -1, 0
+                tessellated = True
+                hold_landmarks(partner, side)
+                added = np.flatnonzero(partner >= 0)
+                continue
         if found is None and mirrored:
             found = _connectivity_wave(points, normals, oriented, spacing, adjacency, partner, side,
                                        paired_tree, paired)
@@ -342,10 +355,10 @@ def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, p
         outliers &= ~ring_consistent(adjacency, partner)
     outliers |= outliers[np.maximum(partner, 0)] & (partner >= 0)  # both ends of a pair
     partner[outliers], side[outliers] = -1, 0
-    exact_twins = bool(median_misfit < VERTEX_EXACT_MISFIT * spacing)
+    exact_twins = bool(median_misfit < VERTEX_EXACT_MISFIT * spacing) or tessellated
     complete = exact_twins if complete is None else complete
     assigned = _complete_by_assignment(points, normals, oriented, spacing, partner, side) if complete else 0
-    return MirrorCorrespondence(partner, side, seeds, waves, exact_twins, assigned)
+    return MirrorCorrespondence(partner, side, seeds, waves, exact_twins, assigned, tessellated)
 
 
 def _complete_by_assignment(points, normals, oriented, spacing, partner, side) -> int:

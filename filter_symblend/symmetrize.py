@@ -325,7 +325,8 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
         entry = {"pairs": int(len(left)), "midline": int(len(midline)),
                  "paired_vertices": float(correspondence.paired_fraction),
                  "grown_vertices": correspondence.grown_fraction,
-                 "growth_waves": correspondence.waves, "surface_asymmetry": _surface_asymmetry(result, faces),
+                 "growth_waves": correspondence.waves, "tessellation_mirror": correspondence.tessellated,
+                 "surface_asymmetry": _surface_asymmetry(result, faces),
                  "local_fit_residual": result.report["local_fit_residual"]["median"]}
         return result, entry
 
