@@ -13,7 +13,7 @@ The same map, grown outward from one pair and its ring by the connectivity alone
 covers nearly the whole mesh when that pair is right, and stops early when it is
 wrong (slid by a row along a regular tessellation, it runs into vertices of other
 valence): so one right seed among many wrong ones is enough (``tessellation_mirror``;
-this is what Blender's "topology mirror" relies on for posed meshes).
+Blender's "topology mirror" option rests on the same property of such meshes).
 """
 
 from __future__ import annotations
@@ -82,6 +82,16 @@ def mirrored_tessellation(adjacency: sparse.csr_matrix, partner: np.ndarray) -> 
     return bool(closed.any()) and float(np.mean(ring_consistent(adjacency, partner)[closed])) >= MIRRORED_RINGS
 
 
+def _neighbours(adjacency: sparse.csr_matrix, vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The edges leaving ``vertices`` (k,): (position in ``vertices``, neighbour), with numpy alone
+    (scipy's row indexing costs more than the work on a small frontier of a large mesh)."""
+    starts = adjacency.indptr[vertices]
+    lengths = adjacency.indptr[vertices + 1] - starts
+    position = np.repeat(np.arange(len(vertices)), lengths)
+    offsets = np.arange(len(position)) - np.repeat(np.cumsum(lengths) - lengths, lengths)
+    return position, adjacency.indices[np.repeat(starts, lengths) + offsets]
+
+
 def connectivity_twins(adjacency: sparse.csr_matrix, partner: np.ndarray, candidates: np.ndarray | None = None):
     """Twins the connectivity implies for unpaired vertices: (sources (k,), twins (k,)).
 
@@ -92,17 +102,17 @@ def connectivity_twins(adjacency: sparse.csr_matrix, partner: np.ndarray, candid
     work grows with their number, not the mesh's.
     """
     candidates = np.flatnonzero(partner < 0) if candidates is None else np.unique(candidates[partner[candidates] < 0])
-    m = len(candidates)
-    rows = adjacency[candidates]
-    source = np.repeat(np.arange(m), np.diff(rows.indptr))  # position in candidates
-    useful = partner[rows.indices] >= 0
-    source, twin_of_neighbour = source[useful], partner[rows.indices[useful]]
-    known = sparse.csr_matrix((np.ones(len(source)), (source, twin_of_neighbour)), shape=(m, len(partner)))
-    counts = np.bincount(source, minlength=m)  # the twins are distinct: one entry per paired neighbour
-    # reach[u, v]: how many twins of u's paired neighbours are adjacent to v.
-    reach = (known @ adjacency).tocoo()
-    fits = (reach.data == counts[reach.row]) & (counts[reach.row] >= LEAST_PAIRED_NEIGHBOURS)
-    sources, twins = reach.row[fits], reach.col[fits]
+    m, n = len(candidates), len(partner)
+    source, neighbour = _neighbours(adjacency, candidates)  # source: position in candidates
+    useful = partner[neighbour] >= 0
+    source, twin_of_neighbour = source[useful], partner[neighbour[useful]]
+    counts = np.bincount(source, minlength=m)  # the twins are distinct: one per paired neighbour
+    # How many twins of each source's paired neighbours each vertex is adjacent to.
+    entry, near_twin = _neighbours(adjacency, twin_of_neighbour)
+    reach, hits = np.unique(source[entry] * n + near_twin, return_counts=True)
+    sources, twins = reach // n, reach % n
+    fits = (hits == counts[sources]) & (counts[sources] >= LEAST_PAIRED_NEIGHBOURS)
+    sources, twins = sources[fits], twins[fits]
     position = np.searchsorted(candidates, twins)
     inside = position < m
     inside[inside] = candidates[position[inside]] == twins[inside]  # the twin is unpaired and a candidate
@@ -138,8 +148,9 @@ def connectivity_growth(adjacency: sparse.csr_matrix, partner: np.ndarray, side:
     added = np.flatnonzero(partner >= 0)
     while True:
         # Only the unpaired neighbours of the pairs added last can be new sources, or their twins.
-        sources, twins = connectivity_twins(adjacency, partner, np.unique(adjacency[added].indices))
-        votes = np.sign(adjacency[sources] @ side).astype(np.int8)
+        sources, twins = connectivity_twins(adjacency, partner, np.unique(_neighbours(adjacency, added)[1]))
+        position, neighbour = _neighbours(adjacency, sources)
+        votes = np.sign(np.bincount(position, weights=side[neighbour], minlength=len(sources))).astype(np.int8)
         keep = (sources == twins) | (votes != 0)
         found = single_pairs(n, sources[keep], twins[keep], votes[keep])
         if found is None:

@@ -235,7 +235,8 @@ def test_a_strongly_bent_mirrored_tessellation_comes_back_exactly_symmetric():
 def test_spot_strongly_bent_or_under_the_figure_1_map_beats_100_landmarks_five_times(deformation):
     """Spot's tessellation mirrors (but for its midline strip): where every plane's pairs are slid by a row,
     the right few among them give its mirror map (before: 4.7 % and 6.9 %, 100 landmarks 0.17 % and
-    0.16 %; now measured 0.0008 % and 0.0001 %)."""
+    0.16 %; now measured 6e-16 and 9e-16 of the diagonal). Shape: 1.36 % against the landmarks' 1.35 %
+    under the Figure 1 map, both the oblique compression that affine mode keeps."""
     path = SHARED_DATA / "spot.obj"
     if not path.exists():
         pytest.skip(f"{path} is absent (shared test data not available)")
@@ -248,7 +249,7 @@ def test_spot_strongly_bent_or_under_the_figure_1_map_beats_100_landmarks_five_t
     errors = [synthetic.symmetry_error(r.points, spot.all_left, spot.all_right) for r in (landmarks, automatic)]
     shapes = [synthetic.shape_error(r.points, spot.points) for r in (landmarks, automatic)]
     print(f"spot {deformation}: symmetry error 100 landmarks / auto {errors}, shape {shapes}")
-    assert errors[1] < errors[0] / 5
+    assert errors[1] < 1e-6 and errors[1] < errors[0] / 5
     assert shapes[1] <= shapes[0] * 1.01
 
 
