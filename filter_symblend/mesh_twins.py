@@ -36,7 +36,7 @@ LEAST_PAIRED_NEIGHBOURS = 2
 MIRROR_COVERAGE = 0.95
 # Seeds grown at most: each growth explains the seeds it pairs alike, and the next is taken among the
 # others. On spot bent 1.2 rad, 9 growths explained every ring-consistent pair of the registration, 10
-# of the intrinsic map (2930 vertices: about 0.05 s per growth).
+# of the intrinsic map.
 SEED_GROWTHS = 12
 
 
