@@ -332,9 +332,7 @@ def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, p
                 partner, side = mirror
                 # Its pairs next to where the tessellation stops mirroring (spot's midline strip) can be
                 # wrong; the geometric growth pairs them from the rings that map whole.
-                open_ring = ~ring_consistent(adjacency, partner)
-                open_ring |= open_ring[np.maximum(partner, 0)] & (partner >= 0)  # both ends of a pair
-                partner[open_ring], side[open_ring] = -1, 0
+                _unpair(partner, side, ~ring_consistent(adjacency, partner))
                 tessellated = True
                 hold_landmarks(partner, side)
                 added = np.flatnonzero(partner >= 0)
@@ -353,12 +351,17 @@ def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, p
     outliers &= ~fixed
     if mirrored:
         outliers &= ~ring_consistent(adjacency, partner)
-    outliers |= outliers[np.maximum(partner, 0)] & (partner >= 0)  # both ends of a pair
-    partner[outliers], side[outliers] = -1, 0
+    _unpair(partner, side, outliers)
     exact_twins = bool(median_misfit < VERTEX_EXACT_MISFIT * spacing) or tessellated
     complete = exact_twins if complete is None else complete
     assigned = _complete_by_assignment(points, normals, oriented, spacing, partner, side) if complete else 0
     return MirrorCorrespondence(partner, side, seeds, waves, exact_twins, assigned, tessellated)
+
+
+def _unpair(partner: np.ndarray, side: np.ndarray, vertices: np.ndarray) -> None:
+    """Unpair the ``vertices`` (N,) bool and their twins: both ends of each of their pairs (in place)."""
+    vertices = vertices | (vertices[np.maximum(partner, 0)] & (partner >= 0))
+    partner[vertices], side[vertices] = -1, 0
 
 
 def _complete_by_assignment(points, normals, oriented, spacing, partner, side) -> int:

@@ -49,9 +49,14 @@ def vertex_adjacency(faces: np.ndarray, count: int) -> sparse.csr_matrix:
     return adjacency
 
 
-def _edges(adjacency: sparse.csr_matrix) -> tuple[np.ndarray, np.ndarray]:
-    rows = np.repeat(np.arange(adjacency.shape[0]), np.diff(adjacency.indptr))
-    return rows, adjacency.indices
+def _neighbours(adjacency: sparse.csr_matrix, vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The edges leaving ``vertices`` (k,): (position in ``vertices``, neighbour), with numpy alone
+    (scipy's row indexing costs more than the work on a small frontier of a large mesh)."""
+    starts = adjacency.indptr[vertices]
+    lengths = adjacency.indptr[vertices + 1] - starts
+    position = np.repeat(np.arange(len(vertices)), lengths)
+    offsets = np.arange(len(position)) - np.repeat(np.cumsum(lengths) - lengths, lengths)
+    return position, adjacency.indices[np.repeat(starts, lengths) + offsets]
 
 
 def _adjacent(adjacency: sparse.csr_matrix, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -63,7 +68,7 @@ def ring_consistent(adjacency: sparse.csr_matrix, partner: np.ndarray) -> np.nda
     """(N,) bool: paired vertices whose every neighbour is paired with a neighbour of their twin,
     and whose twin has as many neighbours (``partner`` (N,): twin index, itself on the
     midline, -1 unpaired)."""
-    source, neighbour = _edges(adjacency)
+    source, neighbour = _neighbours(adjacency, np.arange(len(partner)))
     degree = np.diff(adjacency.indptr)
     paired = partner >= 0
     edge_ok = paired[source] & paired[neighbour]
@@ -76,20 +81,10 @@ def ring_consistent(adjacency: sparse.csr_matrix, partner: np.ndarray) -> np.nda
 def mirrored_tessellation(adjacency: sparse.csr_matrix, partner: np.ndarray) -> bool:
     """Whether the pairs ``partner`` (N,) say the tessellation mirrors itself: at least
     MIRRORED_RINGS of the paired vertices whose neighbours are all paired are ``ring_consistent``."""
-    source, neighbour = _edges(adjacency)
+    source, neighbour = _neighbours(adjacency, np.arange(len(partner)))
     open_ring = np.bincount(source[partner[neighbour] < 0], minlength=len(partner)) > 0
     closed = (partner >= 0) & ~open_ring
     return bool(closed.any()) and float(np.mean(ring_consistent(adjacency, partner)[closed])) >= MIRRORED_RINGS
-
-
-def _neighbours(adjacency: sparse.csr_matrix, vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The edges leaving ``vertices`` (k,): (position in ``vertices``, neighbour), with numpy alone
-    (scipy's row indexing costs more than the work on a small frontier of a large mesh)."""
-    starts = adjacency.indptr[vertices]
-    lengths = adjacency.indptr[vertices + 1] - starts
-    position = np.repeat(np.arange(len(vertices)), lengths)
-    offsets = np.arange(len(position)) - np.repeat(np.cumsum(lengths) - lengths, lengths)
-    return position, adjacency.indices[np.repeat(starts, lengths) + offsets]
 
 
 def connectivity_twins(adjacency: sparse.csr_matrix, partner: np.ndarray, candidates: np.ndarray | None = None):
