@@ -11,7 +11,7 @@ from filter_symblend.mesh_twins import (connectivity_twins, mirrored_tessellatio
                                         vertex_adjacency)
 from filter_symblend.twin_assignment import assigned_twins
 
-from conftest import SHARED_DATA, load_ground_truth
+from conftest import SHARED_DATA, GroundTruth, load_ground_truth
 from test_auto_pairs import symmetric_blob, twins
 
 
@@ -22,6 +22,18 @@ def mirrored_grids(count: int = 10):
     points = np.vstack([left, left * [-1.0, 1.0, 1.0]])
     n = len(left)
     return points, np.concatenate([np.arange(n) + n, np.arange(n)])
+
+
+def against_100_landmarks(truth: GroundTruth, deformed: np.ndarray, mode: str):
+    """Symmetry errors over every true pair of ``truth`` and shape errors (each [100 landmark pairs,
+    pairs='auto'], / diagonal) of ``deformed``, a deformation of ``truth.points``; and the automatic
+    run's report."""
+    left, right = truth.landmarks(100)
+    results = (symmetrize(deformed, left, right, mode=mode),
+               symmetrize(deformed, faces=truth.faces, pairs="auto", mode=mode))
+    errors = [synthetic.symmetry_error(r.points, truth.all_left, truth.all_right) for r in results]
+    shapes = [synthetic.shape_error(r.points, truth.points) for r in results]
+    return errors, shapes, results[1].report
 
 
 def test_an_assignment_finds_every_twin_when_each_prediction_is_nearer_another_vertex():
@@ -94,11 +106,7 @@ def test_a_swung_limb_is_symmetrized_five_times_better_than_with_100_landmarks(s
     name = "spot" if len(mesh.points) == 2930 else "cow"
     weights = synthetic.limb_weights(mesh.points, **synthetic.LIMBS[name])
     deformed = synthetic.random_rigid(synthetic.articulate_limb(mesh.points, weights, angle), seed=7)
-    left, right = mesh.landmarks(100)
-    landmarks = symmetrize(deformed, left, right, mode="articulated")
-    automatic = symmetrize(deformed, faces=mesh.faces, pairs="auto", mode="articulated")
-    errors = [synthetic.symmetry_error(r.points, mesh.all_left, mesh.all_right) for r in (landmarks, automatic)]
-    shapes = [synthetic.shape_error(r.points, mesh.points) for r in (landmarks, automatic)]
+    errors, shapes, _ = against_100_landmarks(mesh, deformed, "articulated")
     print(f"{name} limb {angle} rad: symmetry error 100 landmarks / auto {errors}, shape {shapes}")
     assert errors[1] < errors[0] / 5
     assert shapes[1] <= shapes[0] * 1.01
@@ -219,16 +227,13 @@ def test_a_strongly_bent_mirrored_tessellation_comes_back_exactly_symmetric():
     points, faces = symmetric_blob()
     true_twin = twins(points)
     left = np.flatnonzero(points[:, 0] > 1e-9)
+    blob = GroundTruth(points, faces, left, true_twin[left], 0.0, true_twin)
     deformed = synthetic.random_rigid(synthetic.bend(points, 1.2), seed=7)
-    landmark_left, landmark_right = synthetic.farthest_point_pairs(points, 0.0, true_twin, 100)
-    landmarks = symmetrize(deformed, landmark_left, landmark_right, mode="affine")
-    automatic = symmetrize(deformed, faces=faces, pairs="auto", mode="affine")
-    errors = [synthetic.symmetry_error(r.points, left, true_twin[left]) for r in (landmarks, automatic)]
-    shapes = [synthetic.shape_error(r.points, points) for r in (landmarks, automatic)]
+    errors, shapes, report = against_100_landmarks(blob, deformed, "affine")
     print("symmetry error 100 landmarks / auto:", errors, "shape:", shapes)
     assert errors[1] < 1e-6 and errors[1] < errors[0] / 5
     assert shapes[1] <= shapes[0]
-    assert automatic.report["auto_pairs"]["rounds"][0]["tessellation_mirror"] is True
+    assert report["auto_pairs"]["rounds"][0]["tessellation_mirror"] is True
 
 
 @pytest.mark.parametrize("deformation", ["bend 1.2 rad", "Figure 1"])
@@ -243,11 +248,7 @@ def test_spot_strongly_bent_or_under_the_figure_1_map_beats_100_landmarks_five_t
     spot = load_ground_truth(path)
     deform = {"bend 1.2 rad": lambda p: synthetic.bend(p, 1.2), "Figure 1": synthetic.figure_1_deformation}
     deformed = synthetic.random_rigid(deform[deformation](spot.points), seed=7)
-    left, right = spot.landmarks(100)
-    landmarks = symmetrize(deformed, left, right, mode="affine")
-    automatic = symmetrize(deformed, faces=spot.faces, pairs="auto", mode="affine")
-    errors = [synthetic.symmetry_error(r.points, spot.all_left, spot.all_right) for r in (landmarks, automatic)]
-    shapes = [synthetic.shape_error(r.points, spot.points) for r in (landmarks, automatic)]
+    errors, shapes, _ = against_100_landmarks(spot, deformed, "affine")
     print(f"spot {deformation}: symmetry error 100 landmarks / auto {errors}, shape {shapes}")
     assert errors[1] < 1e-6 and errors[1] < errors[0] / 5
     assert shapes[1] <= shapes[0] * 1.01
