@@ -48,17 +48,19 @@ def assigned_twins(points: np.ndarray, predicted: np.ndarray, allowed, radius: f
     cost = (np.sum((predicted[rows] - points[columns]) ** 2, axis=1)
             + np.sum((predicted[columns] - points[rows]) ** 2, axis=1))
     links = sparse.csr_matrix((np.ones(len(rows)), (rows, columns)), shape=(n, n))
-    _, block = connected_components(links, directed=False)
+    blocks, block = connected_components(links, directed=False)
+    # Points and candidate pairs grouped by block, so that each block costs its own size only.
+    members_of = np.split(np.argsort(block, kind="stable"), np.cumsum(np.bincount(block, minlength=blocks))[:-1])
+    by_block = np.argsort(block[rows], kind="stable")
+    pairs_of = np.split(by_block, np.cumsum(np.bincount(block[rows], minlength=blocks))[:-1])
     match = np.arange(n)
-    for members in np.split(np.argsort(block, kind="stable"), np.cumsum(np.bincount(block))[:-1]):
+    for members, pairs in zip(members_of, pairs_of):
         if len(members) < 2 or len(members) > BLOCK_LIMIT:
             continue
-        local = np.full(n, -1)
-        local[members] = np.arange(len(members))
-        inside = local[rows] >= 0
         matrix = np.full((len(members), len(members)), 4.0 * radius**2)  # no candidate: dearer than unpaired
         np.fill_diagonal(matrix, 2.0 * radius**2)
-        matrix[local[rows[inside]], local[columns[inside]]] = cost[inside]
+        # members is sorted (a stable sort of the block labels), so searchsorted gives local indices.
+        matrix[np.searchsorted(members, rows[pairs]), np.searchsorted(members, columns[pairs])] = cost[pairs]
         match[members] = members[linear_sum_assignment(matrix)[1]]
     a = np.flatnonzero((match[match] == np.arange(n)) & (match > np.arange(n)))  # the 2-cycles, once each
     return a, match[a]
