@@ -108,7 +108,11 @@ SEED_AGREEMENT = 0.5
 # x spacing: intrinsic seeds this short are not used (the eigenfunctions cannot tell a vertex
 # near the midline from its twin a few edges away). On spot bent by 0.2 rad, 70 such pairs
 # were wrong by 0.2-0.4 edges yet agreed with each other, and left the symmetry error at
-# 0.11 %; at 4 edges it is 0.005 % (the cow: 0.002 % either way).
+# 0.11 %; at 4 edges it is 0.005 % (the cow: 0.002 % either way). The registration's seeds are
+# all kept: on the cow under the Figure 1 map (oblique compression crowds the vertices near the
+# midline), growing the band instead left 38 vertices paired with a neighbour of their twin, and
+# the symmetry error at 0.070 % (with them kept it is exact, the 21 wrong ones among them failing the
+# registration's round trip).
 SHORT_PAIR = 4.0
 # x spacing: a map's correspondence, once grown, is grown again from its pairs longer than this.
 # The first growth fills the band around the midline by predicting from seeds at least
@@ -449,7 +453,7 @@ def intrinsic_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal
     initial = cKDTree(points).query(reflection_across_plane(points, normalize(np.asarray(plane_normal, dtype=float)),
                                                             plane_offset))[1]
     return mapped_correspondence(points, faces, plane_normal, plane_offset,
-                                 *intrinsic_mirror_map(points, faces, initial))
+                                 *intrinsic_mirror_map(points, faces, initial), shortest=SHORT_PAIR)
 
 
 def registered_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal,
@@ -457,26 +461,25 @@ def registered_correspondence(points: np.ndarray, faces: np.ndarray, plane_norma
     """Mirror twins for a bent, compressed or articulated mesh, seeded by registering its
     reflection onto it (coherent point drift, see ``registration``)."""
     return mapped_correspondence(points, faces, plane_normal, plane_offset,
-                                 *registered_mirror_map(points, faces, plane_normal, plane_offset))
+                                 *registered_mirror_map(points, faces, plane_normal, plane_offset), shortest=0.0)
 
 
 def mapped_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, plane_offset: float,
-                          sample: np.ndarray, twin: np.ndarray, round_trip: np.ndarray) -> MirrorCorrespondence:
+                          sample: np.ndarray, twin: np.ndarray, round_trip: np.ndarray,
+                          shortest: float) -> MirrorCorrespondence:
     """Mirror twins grown (as in :func:`mirror_correspondence`) from the twins ``twin`` (S,) that a
     mirror map gives a sample (S,) of the vertices, kept where the map is its own inverse
-    (``round_trip`` (S,): the twin of the twin) and agrees with the local mirror map of the
-    neighbouring seeds, then grown again from the pairs longer than REGROW edges (the band
-    around the midline predicted from both sides). The plane tells left from right: a twin
+    (``round_trip`` (S,): the twin of the twin), the pair is longer than ``shortest`` (x spacing;
+    the growth pairs the vertices nearer the midline, and the midline points) and agrees with
+    the local mirror map of the neighbouring seeds, then grown again from the pairs longer than
+    REGROW edges (the band around the midline predicted from both sides). The plane tells left from right: a twin
     lies on the side its partner's gap points from."""
     points = np.asarray(points, dtype=float)
     plane_normal = normalize(np.asarray(plane_normal, dtype=float))
     spacing = mean_spacing(points, faces)
     consistent = np.linalg.norm(points[round_trip] - points[sample], axis=1) < spacing
     sample, twin = sample[consistent], twin[consistent]
-    # A map's pairs this short (and its midline points) are not used; the growth finds them from
-    # the pairs around. The eigenfunctions cannot tell a vertex near the midline from its twin a
-    # few edges away; the registration's pairs are kept to the same rule.
-    far = np.linalg.norm(points[twin] - points[sample], axis=1) > SHORT_PAIR * spacing
+    far = np.linalg.norm(points[twin] - points[sample], axis=1) > shortest * spacing
     sample, twin = sample[far], twin[far]
     leftward = (points[sample] - points[twin]) @ plane_normal > 0
     pairs = np.unique(np.column_stack([np.where(leftward, sample, twin), np.where(leftward, twin, sample)]),

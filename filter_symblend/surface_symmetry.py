@@ -1,7 +1,9 @@
 """Mirror asymmetry of a whole surface: its best mirror plane and how far it is from its reflection.
 
 The plane is fitted by reflection ICP (the surface matched to its own mirror
-image), from several starting planes, keeping the best. The asymmetry of a
+image), from several starting planes, keeping the best: the planes normal to the
+principal axes and the most promising of many directions spread over the half
+sphere. The asymmetry of a
 vertex is its distance to the reflected surface; by the reflection's symmetry
 the two directions of the Hausdorff distance are equal, so one direction,
 sampled at the vertices, is the two-way value.
@@ -13,13 +15,20 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .asymmetry import MirrorFit, fit_mirror_plane
-from .geometry import normalize, reflection_across_plane
+from .geometry import hemisphere_directions, normalize, reflection_across_plane
 from .mirror_fill import closest_points_on_surface
 
 ICP_SAMPLES = 20000  # vertices used to fit the plane
 ICP_ITERATIONS = 40
 TRIM_FRACTION = 0.8  # correspondences kept per ICP step: the closest 80 %
 SCREEN_SAMPLES = 2000  # vertices used to screen starting planes
+# Starting planes added to the principal axes' by default: the SCREENED_STARTS most promising of
+# SCREENED_DIRECTIONS spread directions. On the cow under the paper's Figure 1 map (bend 1.2 rad,
+# oblique compression to 0.65, shear 0.15) the principal axes' planes end 14-87 degrees from the
+# plane of its true pairs; the best screened start ends 2.8 degrees from it, with a lower trimmed
+# RMS (0.039 against 0.043 mesh units). Screening costs about 0.7 s whatever the mesh size.
+SCREENED_DIRECTIONS = 200
+SCREENED_STARTS = 3
 
 
 def _refine_plane(points: np.ndarray, tree: cKDTree, normal: np.ndarray, offset: float):
@@ -43,14 +52,17 @@ def fit_surface_mirror_plane(points: np.ndarray, initial: MirrorFit | None = Non
     """Best mirror plane ``(normal (3,), offset)`` of a point set (N, 3): normal . x = offset.
 
     Starts from the planes through the centroid normal to the rows of ``axes``
-    (k, 3) (default the three principal axes), and from ``initial`` (e.g. the
-    landmarks' plane), refines each by trimmed reflection ICP on at most
-    ``ICP_SAMPLES`` evenly strided vertices, keeps the best.
+    (k, 3) (default the three principal axes and the SCREENED_STARTS most
+    :func:`promising_normals`), and from ``initial`` (e.g. the landmarks' plane),
+    refines each by trimmed reflection ICP on at most ``ICP_SAMPLES`` evenly
+    strided vertices, keeps the best.
     """
     sample = points[:: max(1, len(points) // ICP_SAMPLES)]
     centre = sample.mean(axis=0)
     if axes is None:
-        _, _, axes = np.linalg.svd(sample - centre, full_matrices=False)
+        _, _, principal = np.linalg.svd(sample - centre, full_matrices=False)
+        axes = np.vstack([principal, promising_normals(points, hemisphere_directions(SCREENED_DIRECTIONS),
+                                                       SCREENED_STARTS)])
     axes = normalize(np.asarray(axes, dtype=float))
     starts = [(axis, float(axis @ centre)) for axis in axes]
     if initial is not None:
@@ -63,7 +75,8 @@ def fit_surface_mirror_plane(points: np.ndarray, initial: MirrorFit | None = Non
 def promising_normals(points: np.ndarray, normals: np.ndarray, keep: int) -> np.ndarray:
     """The ``keep`` rows of ``normals`` (n, 3) whose planes through the centroid reflect a sample of
     ``points`` (N, 3) closest onto itself (trimmed RMS, one nearest-neighbour query each): cheap
-    starts for :func:`fit_surface_mirror_plane` when the principal axes say nothing."""
+    starts for :func:`fit_surface_mirror_plane` where the principal axes mislead (an oblique
+    compression) or say nothing (a whitened shape)."""
     sample = points[:: max(1, len(points) // SCREEN_SAMPLES)]
     centre = sample.mean(axis=0)
     tree = cKDTree(sample)

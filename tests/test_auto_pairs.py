@@ -213,7 +213,8 @@ def test_landmark_modes_need_landmarks():
 
 def test_a_shape_without_mirror_symmetry_is_refused_with_advice():
     points = np.random.default_rng(0).normal(size=(300, 3)) * [3.0, 2.0, 1.0]
-    with pytest.raises(GeometryError, match=r"Automatic pairing found \d+ mirror pair\(s\).*landmarks\+auto") as raised:
+    with pytest.raises(GeometryError, match=r"Automatic pairing found no usable mirror pairs \(mirror plane: "
+                       r"rejected: it pairs \d+% of the vertices, fewer than 20%;.*landmarks\+auto") as raised:
         symmetrize(points, pairs="auto")
     message = str(raised.value)
     assert message.count("landmarks+auto") == 1  # the advice once, not once per candidate

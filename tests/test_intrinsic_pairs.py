@@ -9,12 +9,15 @@ import pytest
 from scipy.spatial import ConvexHull
 
 from filter_symblend import GeometryError, SymblendWarning, symmetrize, synthetic
+from filter_symblend.asymmetry import fit_mirror_plane
 from filter_symblend.auto_pairs import WHITENED_DIRECTIONS, WHITENED_STARTS, intrinsic_correspondence
 from filter_symblend.geometry import hemisphere_directions, whitening
 from filter_symblend.mesh_geometry import mean_spacing
 from filter_symblend.registration import registered_mirror_map
 from filter_symblend.spectral import laplace_eigenfunctions
 from filter_symblend.surface_symmetry import fit_surface_mirror_plane, promising_normals
+
+from test_twin_completion import against_100_landmarks
 
 
 def unit_sphere(count: int = 4000):
@@ -154,9 +157,11 @@ def test_registration_pairs_every_sampled_vertex_of_a_bent_cow_with_its_true_twi
     partner = np.full(len(cow.points), -1)
     partner[cow.all_left], partner[cow.all_right] = cow.all_right, cow.all_left
     known = partner[sample] >= 0
-    assert len(sample) == 2000
+    # of 2000, those whose reflection lands off every vertex or whose twin's twin is not themselves are
+    # dropped (measured 1940), mostly the vertices near the cow's midline that have no exact twin
+    assert len(sample) > 1900
+    np.testing.assert_array_equal(round_trip, sample)
     assert np.mean(twin[known] == partner[sample][known]) > 0.99  # measured 1.0 (one plane: 0.1)
-    assert np.mean(round_trip == sample) > 0.95  # measured 0.99
 
 
 def test_without_the_normal_term_registration_undoes_the_reflection(cow, monkeypatch):
@@ -165,15 +170,19 @@ def test_without_the_normal_term_registration_undoes_the_reflection(cow, monkeyp
     from filter_symblend import registration
     bent = synthetic.random_rigid(synthetic.bend(cow.points, 1.2), seed=7)
     plane = fit_surface_mirror_plane(bent)
-    sample, twin, _ = registered_mirror_map(bent, cow.faces, *plane)
-    monkeypatch.setattr(registration, "NORMAL_WEIGHT", 0.0)
-    _, blind_twin, _ = registered_mirror_map(bent, cow.faces, *plane)
     partner = np.full(len(cow.points), -1)
     partner[cow.all_left], partner[cow.all_right] = cow.all_right, cow.all_left
-    apart = (partner[sample] >= 0) & (np.linalg.norm(bent[sample] - bent[partner[sample]], axis=1)
-                                      > 3 * mean_spacing(bent, cow.faces))  # true twin 3 edges away or more
-    assert np.mean(twin[apart] == partner[sample][apart]) > 0.95  # measured 0.98
-    assert np.mean(blind_twin[apart] == sample[apart]) > 0.9  # its own twin; measured 1.0
+
+    def apart(sample):  # the sampled vertices whose true twin is 3 edges away or more
+        return (partner[sample] >= 0) & (np.linalg.norm(bent[sample] - bent[partner[sample]], axis=1)
+                                         > 3 * mean_spacing(bent, cow.faces))
+
+    sample, twin, _ = registered_mirror_map(bent, cow.faces, *plane)
+    monkeypatch.setattr(registration, "NORMAL_WEIGHT", 0.0)
+    blind_sample, blind_twin, _ = registered_mirror_map(bent, cow.faces, *plane)
+    assert np.mean(twin[apart(sample)] == partner[sample][apart(sample)]) > 0.95  # measured 0.98
+    # its own twin (measured 1.0)
+    assert np.mean(blind_twin[apart(blind_sample)] == blind_sample[apart(blind_sample)]) > 0.9
 
 
 def test_a_compressed_and_sheared_shape_is_restored_exactly_without_landmarks(cow):
@@ -196,12 +205,47 @@ def test_rounds_that_do_not_make_the_surface_more_symmetric_are_not_kept(cow):
         assert rounds[-1]["kept"] is False and rounds[-1]["surface_asymmetry"] >= kept[-1]
 
 
-def test_a_shape_no_candidate_can_pair_is_refused_naming_each_candidate(cow):
-    """The Figure 1 map (bend, then oblique compression and shear) defeats all three candidates;
-    symmetrizing with their pairs made the cow less symmetric, so it is refused."""
+def test_the_surface_plane_of_an_obliquely_compressed_bend_is_found_from_the_screened_starts(cow):
+    """Under the Figure 1 map (bend 1.2 rad, then oblique compression and shear) the planes normal to the
+    principal axes end far from the plane of the true pairs (measured 14-87 degrees); the default starts
+    add the most promising of many directions, and the plane found is within 3 degrees of it (2.8)."""
+    deformed = synthetic.random_rigid(synthetic.figure_1_deformation(cow.points), seed=7)
+    truth = fit_mirror_plane(deformed[cow.all_left], deformed[cow.all_right]).normal
+    centred = deformed - deformed.mean(axis=0)
+    principal = np.linalg.svd(centred, full_matrices=False)[2]
+
+    def degrees_off(normal):
+        return np.degrees(np.arccos(min(1.0, abs(normal @ truth))))
+
+    assert degrees_off(fit_surface_mirror_plane(deformed, axes=principal)[0]) > 10
+    assert degrees_off(fit_surface_mirror_plane(deformed)[0]) < 3
+
+
+def test_the_cow_under_the_figure_1_map_comes_back_exactly_symmetric_without_landmarks(cow):
+    """The registration from the right plane pairs the cow under the Figure 1 map (it was refused when the
+    plane came from the principal axes alone), its short pairs near the midline are kept, and only the
+    twins that land on a vertex and whose round trip is exact (grown instead, 38 vertices near the
+    midline took a neighbour of their twin: 0.070 %). Measured: symmetry error 1e-15 of the diagonal
+    against 0.213 % with 100 landmarks; shape 1.357 % against 1.614 %."""
+    deformed = synthetic.random_rigid(synthetic.figure_1_deformation(cow.points), seed=7)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SymblendWarning)
+        errors, shapes, report = against_100_landmarks(cow, deformed, "affine")
+    print("cow Figure 1: symmetry error 100 landmarks / auto", errors, "shape", shapes)
+    assert report["auto_pairs"]["rounds"][0]["first_pairs"] == "registration"
+    assert errors[1] < 1e-6 and errors[1] < errors[0] / 5
+    assert shapes[1] <= shapes[0]
+
+
+def test_a_shape_no_candidate_can_pair_is_refused_naming_each_candidate(cow, monkeypatch):
+    """The Figure 1 map (bend, then oblique compression and shear) with the surface plane searched from the
+    principal axes alone (a wrong plane, 70 degrees off) defeats every candidate: three pair too few
+    vertices, and the registration's pairs fall apart into groups; so it is refused, each candidate
+    named with its reason."""
+    monkeypatch.setattr(import_module("filter_symblend.surface_symmetry"), "SCREENED_STARTS", 0)
     deformed = synthetic.random_rigid(synthetic.figure_1_deformation(cow.points), seed=7)
     with pytest.raises(GeometryError, match=r"no usable mirror pairs \(mirror plane: rejected: it pairs \d+% of the "
-                       r"vertices, fewer than 20%; whitened mirror plane: rejected: .*; registration: rejected: .*; "
+                       r"vertices, fewer than 20%; whitened mirror plane: rejected: .*; registration: .*; "
                        r"intrinsic: rejected: .*\)\. "
                        r"The shape may be too far .* use pairs='landmarks\+auto'\."):
         symmetrize(deformed, faces=cow.faces, pairs="auto", mode="affine")
