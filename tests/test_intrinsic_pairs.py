@@ -151,7 +151,7 @@ def test_by_default_every_automatic_pair_found_on_a_small_mesh_enters_the_solve(
     assert errors[0] < errors[1] / 5  # measured 0.0005 % against 0.0064 %
 
 
-def test_registration_pairs_every_sampled_vertex_of_a_bent_cow_with_its_true_twin(cow):
+def test_registration_pairs_the_sampled_vertices_of_a_bent_cow_with_their_true_twins(cow):
     bent = synthetic.random_rigid(synthetic.bend(cow.points, 0.6), seed=4)
     sample, twin, round_trip = registered_mirror_map(bent, cow.faces, *fit_surface_mirror_plane(bent))
     partner = np.full(len(cow.points), -1)
