@@ -26,7 +26,7 @@ SCREEN_SAMPLES = 2000  # vertices used to screen starting planes
 # SCREENED_DIRECTIONS spread directions. On the cow under the paper's Figure 1 map (bend 1.2 rad,
 # oblique compression to 0.65, shear 0.15) the principal axes' planes end 14-87 degrees from the
 # plane of its true pairs; the best screened start ends 2.8 degrees from it, with a lower trimmed
-# RMS (0.039 against 0.043 mesh units). Screening costs about 0.7 s whatever the mesh size.
+# RMS (0.039 against 0.043 mesh units). Screening costs 0.4-1 s whatever the mesh size.
 SCREENED_DIRECTIONS = 200
 SCREENED_STARTS = 3
 
@@ -52,17 +52,19 @@ def fit_surface_mirror_plane(points: np.ndarray, initial: MirrorFit | None = Non
     """Best mirror plane ``(normal (3,), offset)`` of a point set (N, 3): normal . x = offset.
 
     Starts from the planes through the centroid normal to the rows of ``axes``
-    (k, 3) (default the three principal axes and the SCREENED_STARTS most
-    :func:`promising_normals`), and from ``initial`` (e.g. the landmarks' plane),
-    refines each by trimmed reflection ICP on at most ``ICP_SAMPLES`` evenly
-    strided vertices, keeps the best.
+    (k, 3) (default the three principal axes, and without ``initial`` the
+    SCREENED_STARTS most :func:`promising_normals` too), and from ``initial``
+    (e.g. the landmarks' plane; given one, the screening is skipped), refines
+    each by trimmed reflection ICP on at most ``ICP_SAMPLES`` evenly strided
+    vertices, keeps the best.
     """
     sample = points[:: max(1, len(points) // ICP_SAMPLES)]
     centre = sample.mean(axis=0)
     if axes is None:
-        _, _, principal = np.linalg.svd(sample - centre, full_matrices=False)
-        axes = np.vstack([principal, promising_normals(points, hemisphere_directions(SCREENED_DIRECTIONS),
-                                                       SCREENED_STARTS)])
+        _, _, axes = np.linalg.svd(sample - centre, full_matrices=False)
+        if initial is None:
+            screened = promising_normals(points, hemisphere_directions(SCREENED_DIRECTIONS), SCREENED_STARTS)
+            axes = np.vstack([axes, screened])
     axes = normalize(np.asarray(axes, dtype=float))
     starts = [(axis, float(axis @ centre)) for axis in axes]
     if initial is not None:
