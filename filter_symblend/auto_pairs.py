@@ -18,7 +18,8 @@ pairs that the local maps of their neighbours do not confirm are dropped: one
 wrong pair, forced symmetric by the solve, distorts its whole neighbourhood.
 Last, on a mesh whose two sides' vertices mirror each other, the vertices still
 unpaired (the joint of a swung limb, where the local maps predict too far off)
-are paired together by an assignment (see ``twin_assignment``).
+are paired together by an assignment (see ``twin_assignment``) on where the
+connectivity and the pairs around put their twins (``mesh_twins.harmonic_twin_coordinates``).
 
 Units: ``spacing`` is the mean edge length (mean nearest-neighbour distance
 for a point cloud); distances below are multiples of it.
@@ -36,8 +37,8 @@ from .errors import GeometryError
 from .geometry import MIRROR_X, hemisphere_directions, normalize, proper_rotation_fit, reflection_across_plane, whitening
 from .mesh_geometry import farthest_point_order, mean_spacing, vertex_normals
 from .twin_assignment import assigned_twins
-from .mesh_twins import (connectivity_twins, mirrored_tessellation, ring_consistent, single_pairs,
-                         tessellation_mirror, vertex_adjacency)
+from .mesh_twins import (_adjacent, _neighbours, connectivity_twins, harmonic_twin_coordinates, mirrored_tessellation,
+                         ring_consistent, single_pairs, tessellation_mirror, vertex_adjacency)
 from .registration import registered_mirror_map
 from .spectral import intrinsic_mirror_map
 from .surface_symmetry import fit_surface_mirror_plane, promising_normals
@@ -71,31 +72,49 @@ NEIGHBOURS = 12  # paired vertices fitting each local mirror map
 # 0.18-0.33; the Igea scan 0.31. Right pairs of spot bent 1.2 rad: about 0.05 after the whitening, where the
 # local affine maps follow the bend less well (there the tessellation says so instead).
 VERTEX_EXACT_MISFIT = 0.05
-# x spacing: a vertex's candidate twins lie within this of its predicted twin. Completing the intrinsic
-# pairs of the cow with a limb swung 0.6 rad (the growth's local maps predicting), 1.5 left 88
-# vertices with a wrong twin, 2.5 48, 5 120.
-ASSIGNMENT_RADIUS = 2.5
-# x spacing: each assignment keeps the pairs with an end this close to the paired region (a ring), then predicts
-# again from them (the joint is paired from its edge inwards).
-ASSIGNMENT_RING = 1.2
-# Pairs whose mirror map the thin-plate spline that predicts the twins interpolates locally. The same
-# completion: 44 wrong twins with 32, 52 with 64 or 200, 76 with the local maps instead (symmetry
-# error of their solve 0.19 %, 0.21 %, 0.27 %).
-ASSIGNMENT_SPLINE_NEIGHBOURS = 32
+# The completion's two twin predictors (see ``_complete_by_assignment``), and the radius (x spacing) its
+# candidate twins lie within: the thin-plate spline through the mirror map of the SPLINE_NEIGHBOURS
+# nearest pairs (measured when it was the only one, on the cow's joint swung 0.6 rad: 44 wrong twins
+# with 32, 52 with 64 or 200, 76 with the local maps instead; radius 1.5: 88, 2.5: 48, 5: 120); and the
+# connectivity, in the harmonic coordinates of ``mesh_twins.harmonic_twin_coordinates`` (that joint:
+# symmetry error 0.063 % with 1.0 or 1.2, 0.100 % with 1.5).
+SPLINE_NEIGHBOURS = 32
+SPLINE_RADIUS = 2.5
+HARMONIC_RADIUS = 1.2
+# The connectivity's twins are taken only if they keep this much more of the mesh's edges than the
+# spline's (see ``_kept_edges``): a slide keeps edges too, and in a broad hole the spline is right more
+# often (recovering a band of known pairs around the holes: 94-98 % against 70-80 %). Measured, the
+# connectivity's share minus the spline's: the cow's joint swung 0.6 rad +0.16 (10 wrong twins against
+# 66); its whole leg swung 0.3 rad on the output of 20 landmarks -0.09 (128 against 6); the cow bent 0.4
+# or 0.6 rad on the output of 10 or 20 landmarks, a first completion of 450-890 vertices +0.03 and +0.04
+# (both a quarter wrong or more, the spline fewer: 0.469 % and 0.167 % where taking the larger share
+# gave 0.606 % and 0.216 %), the next one +0.13 (the connectivity fewer wrong).
+HARMONIC_MARGIN = 0.1
 # x spacing: the completion makes no pair this short. pymeshlab's cow has 107 vertices near its
 # midline without an exact twin; paired to each other (pairs of 0.6-2.02 edges) they left the
 # exactly symmetric cow's shape error at 0.097 % instead of 0.003 %. Pairs across a joint are
 # 2.35 edges and longer.
 ASSIGNMENT_SHORT = 2.2
-# x spacing: nor a pair whose twins lie farther than this from their predictions. The cow's vertices
-# without an exact twin, paired on the output of 100 landmarks for the cow bent 1.2 rad: 1.03-1.95
-# edges (they took its shape error from 0.13 % to 0.30 %); right twins at a joint swung 0.3 rad:
-# up to 0.84, 0.6 rad: 90 % below 0.81 (the wrong ones there: 0.58-2.39).
+# Nor a pair whose twin lies farther from where the local mirror map puts it than ASSIGNMENT_ERROR x
+# spacing, or than ASSIGNMENT_RATIO x the distance from there to the vertex itself, whichever is
+# larger (a twin must be clearly better than being on the midline). On the cow, the vertices without
+# an exact twin got twins 2.2-4.6 edges away, 1.8-5.6 edges from the prediction (ratio 0.6 or more,
+# 1 or more for 90 %): they took the exactly symmetric cow's shape error to 0.33 % (0.003 % with
+# the bounds). Right twins at a joint swung 0.6 rad lie up to 2.1 edges off (ratio up to 0.65): there
+# the symmetry error is 0.063 % with a ratio of 0.7 or 0.8, 0.076 % with 0.6, 0.098 % with 0.5.
 ASSIGNMENT_ERROR = 1.0
+ASSIGNMENT_RATIO = 0.7
 # The completion's normal test: facing the mirrored way at all. With MATCH_COSINE, 4 pairs of the
 # exactly symmetric cow whose vertex normals differ from their twins' (its two sides are
 # triangulated differently) took each other's twins, 0.4 edges off (shape error 0.021 %).
 ASSIGNMENT_COSINE = 0.0
+# Share of the vertices that :func:`unmoved_pairs` must pair: a part the deformation left as it was.
+# Measured: the cow and spot with a limb swung 0.6 rad, 80 % and 90 %, every pair right (22 of the
+# cow's 105 midline points are vertices without an exact twin, within 0.05 edges of the plane); bent
+# 0.2 rad or more, with or without a compression, under 1 % (spot bent 0.2 rad: 3 pairs and 11 midline
+# points, 1 and 3 of them wrong; without the neighbours' test 36 and 25, 17 and 9 wrong). Holding them
+# took the cow with a limb swung 0.6 rad from 0.094 % to 0.063 %.
+UNMOVED_SHARE = 0.2
 # x spacing: a twin the connectivity implies is taken if the local mirror map puts it this close
 # (a sanity bound: on spot with a limb swung 0.6 rad these twins are all right).
 CONNECTED_MATCH_DISTANCE = 2.0
@@ -175,16 +194,17 @@ def _agreement(mapped_normals: np.ndarray, normals: np.ndarray, oriented: bool) 
     return cosine if oriented else np.abs(cosine)
 
 
-def _seed(points, normals, oriented, tree, spacing, plane_normal, plane_offset):
-    """(partner, side, acceptance distance) of the vertices a single mirror plane pairs reliably."""
+def _seed(points, normals, oriented, tree, spacing, plane_normal, plane_offset, exact=False):
+    """(partner, side, acceptance distance) of the vertices a single mirror plane pairs reliably
+    (``exact``: with the acceptance distance MIN_MATCH_DISTANCE)."""
     n = len(points)
     distance, nearest = tree.query(reflection_across_plane(points, plane_normal, plane_offset))
     index = np.arange(n)
     mutual = nearest[nearest] == index
     if not mutual.any():
         return np.full(n, -1), np.zeros(n, dtype=np.int8), MIN_MATCH_DISTANCE * spacing
-    tolerance = spacing * np.clip(2.0 * np.median(distance[mutual]) / spacing,
-                                  MIN_MATCH_DISTANCE, MAX_MATCH_DISTANCE)
+    tolerance = spacing * (MIN_MATCH_DISTANCE if exact else np.clip(2.0 * np.median(distance[mutual]) / spacing,
+                                                                     MIN_MATCH_DISTANCE, MAX_MATCH_DISTANCE))
     mirrored_normals = reflection_across_plane(normals, plane_normal, 0.0)  # directions: through the origin
     good = (mutual & (distance < np.where(nearest == index, MIDLINE_DISTANCE * spacing, tolerance))
             & (_agreement(mirrored_normals, normals[nearest], oriented) > SEED_COSINE))
@@ -358,7 +378,7 @@ def mirror_correspondence(points: np.ndarray, faces: np.ndarray, plane_normal, p
     _unpair(partner, side, outliers)
     exact_twins = bool(median_misfit < VERTEX_EXACT_MISFIT * spacing) or tessellated
     complete = exact_twins if complete is None else complete
-    assigned = _complete_by_assignment(points, normals, oriented, spacing, partner, side) if complete else 0
+    assigned = _complete_by_assignment(points, normals, oriented, spacing, adjacency, partner, side) if complete else 0
     return MirrorCorrespondence(partner, side, seeds, waves, exact_twins, assigned, tessellated)
 
 
@@ -368,35 +388,81 @@ def _unpair(partner: np.ndarray, side: np.ndarray, vertices: np.ndarray) -> None
     partner[vertices], side[vertices] = -1, 0
 
 
-def _complete_by_assignment(points, normals, oriented, spacing, partner, side) -> int:
+def _complete_by_assignment(points, normals, oriented, spacing, adjacency, partner, side) -> int:
+    """Pair the vertices still unpaired (``partner``, ``side`` updated in place; nothing without
+    triangles), by :func:`_complete_with` each twin predictor, :func:`_spline_twins` and
+    :func:`_harmonic_twins`, keeping the pairs of the spline unless the connectivity's keep
+    HARMONIC_MARGIN more of the mesh's edges (see :func:`_kept_edges`). Returns the number of
+    vertices paired."""
+    if adjacency is None:
+        return 0
+    trials = []
+    for predictor, bias in ((_spline_twins, 0.0), (_harmonic_twins, -HARMONIC_MARGIN)):
+        trial = partner.copy(), side.copy()
+        count = _complete_with(predictor, points, normals, oriented, spacing, adjacency, *trial)
+        trials.append((_kept_edges(adjacency, partner, trial[0]) + bias if count else -1.0, count, trial))
+    _, count, (best_partner, best_side) = max(trials, key=lambda trial: trial[0])
+    partner[:], side[:] = best_partner, best_side
+    return count
+
+
+def _kept_edges(adjacency, before: np.ndarray, after: np.ndarray) -> float:
+    """Share of the mesh edges from a vertex paired in ``after`` (N,) but not ``before`` (N,) to a paired
+    vertex whose twins share an edge too: 1 for a mirrored tessellation's true twins, less where quads
+    are split along opposite diagonals, less still where the twins slide. Measured on the cow's joint
+    swung 0.6 rad: the connectivity's twins (10 of 184 wrong) 0.85, the spline's (66 of 186) 0.69; on
+    its whole leg swung 0.3 rad, unpaired on the output of 20 landmarks: the spline's (6 of 328) 0.84,
+    the connectivity's (128 of 320) 0.75."""
+    new = np.flatnonzero((before < 0) & (after >= 0))
+    source, neighbour = _neighbours(adjacency, new)
+    paired = after[neighbour] >= 0
+    kept = _adjacent(adjacency, after[new[source[paired]]], after[neighbour[paired]])
+    return float(np.mean(kept)) if len(kept) else 0.0
+
+
+def _spline_twins(points, adjacency, partner, unpaired, paired):
+    """(the unpaired vertices predicted, their positions, where their twins are predicted, the
+    assignment radius): by the thin-plate spline through the mirror map of the nearest pairs
+    (the local maps where it is undefined: those pairs all in one plane)."""
+    try:
+        predicted = RBFInterpolator(points[paired], points[partner[paired]], kernel="thin_plate_spline",
+                                    neighbors=min(SPLINE_NEIGHBOURS, len(paired)))(points[unpaired])
+    except np.linalg.LinAlgError:
+        predicted = _predicted_twins(points, partner, unpaired, cKDTree(points[paired]), paired)[0]
+    return unpaired, points[unpaired], predicted, SPLINE_RADIUS
+
+
+def _harmonic_twins(points, adjacency, partner, unpaired, paired):
+    """The same by the connectivity (:func:`mesh_twins.harmonic_twin_coordinates`)."""
+    return (*harmonic_twin_coordinates(adjacency, partner, points), HARMONIC_RADIUS)
+
+
+def _complete_with(predictor, points, normals, oriented, spacing, adjacency, partner, side) -> int:
     """Pair the vertices still unpaired, ring by ring from the paired region inwards, by
-    :func:`twin_assignment.assigned_twins` on their twins as the mirror map of the pairs,
-    interpolated by a local thin-plate spline, predicts them (by the growth's local maps where
-    the spline is undefined: the nearest pairs all in one plane) (``partner``, ``side`` updated
-    in place). Returns the number of vertices paired."""
+    :func:`twin_assignment.assigned_twins` on where ``predictor`` (:func:`_spline_twins` or
+    :func:`_harmonic_twins`) puts their twins (``partner``, ``side`` updated in place). Returns the
+    number of vertices paired."""
     before = np.count_nonzero(partner >= 0)
     while True:
-        unpaired, paired = np.flatnonzero(partner < 0), np.flatnonzero(partner >= 0)
+        paired = np.flatnonzero(partner >= 0)
+        unpaired, own, mirrored, radius = predictor(points, adjacency, partner, np.flatnonzero(partner < 0), paired)
         if len(unpaired) < 2 or len(paired) < NEIGHBOURS:
             break
-        paired_tree = cKDTree(points[paired])
-        predicted, mapped_normals, neighbours = _predict(points, normals, partner, unpaired, paired_tree, paired)
-        try:
-            predicted = RBFInterpolator(points[paired], points[partner[paired]], kernel="thin_plate_spline",
-                                        neighbors=min(ASSIGNMENT_SPLINE_NEIGHBOURS, len(paired)))(points[unpaired])
-        except np.linalg.LinAlgError:  # pairs all in one plane around some vertex: the local maps predict
-            pass
+        predicted, mapped_normals, neighbours = _predict(points, normals, partner, unpaired, cKDTree(points[paired]),
+                                                         paired)
 
-        def facing(rows, columns):
-            return _agreement(mapped_normals[rows], normals[unpaired[columns]], oriented) > ASSIGNMENT_COSINE
+        def allowed(rows, columns):
+            """Twins near where the local maps put them (see ASSIGNMENT_RATIO), facing the mirrored way."""
+            error = np.linalg.norm(predicted[rows] - points[unpaired[columns]], axis=1)
+            itself = np.linalg.norm(predicted[rows] - points[unpaired[rows]], axis=1)
+            near = error < np.maximum(ASSIGNMENT_ERROR * spacing, ASSIGNMENT_RATIO * itself)
+            return near & (_agreement(mapped_normals[rows], normals[unpaired[columns]], oriented) > ASSIGNMENT_COSINE)
 
-        a, b = assigned_twins(points[unpaired], predicted, facing, ASSIGNMENT_RADIUS * spacing)
-        near = paired_tree.query(points[unpaired])[0] < ASSIGNMENT_RING * spacing
+        a, b = assigned_twins(own, mirrored, allowed, radius * spacing)
+        rim = np.asarray(adjacency[unpaired][:, paired].sum(axis=1)).ravel() > 0
         votes = np.sign(side[neighbours[a]].sum(axis=1)).astype(np.int8)
         long = np.linalg.norm(points[unpaired[a]] - points[unpaired[b]], axis=1) > ASSIGNMENT_SHORT * spacing
-        error = np.maximum(np.linalg.norm(predicted[a] - points[unpaired[b]], axis=1),
-                           np.linalg.norm(predicted[b] - points[unpaired[a]], axis=1))
-        ring = (near[a] | near[b]) & long & (error < ASSIGNMENT_ERROR * spacing) & (votes != 0)
+        ring = (rim[a] | rim[b]) & long & (votes != 0)
         if not ring.any():
             break
         u, v = unpaired[a[ring]], unpaired[b[ring]]
@@ -426,6 +492,30 @@ def _outliers(points, partner, spacing) -> tuple[np.ndarray, float]:
     median = float(np.median(misfit))
     outliers[paired] = misfit > max(OUTLIER * spacing, 2.0 * median)
     return outliers, median
+
+
+def unmoved_pairs(points: np.ndarray, faces: np.ndarray, plane_normal, plane_offset: float):
+    """Where a mesh is still exactly mirror-symmetric across the plane: (left (n,), right (n,),
+    midline (m,)).
+
+    The vertices whose reflection lands within MIN_MATCH_DISTANCE edge lengths of a vertex whose own
+    reflection lands on them, facing the mirrored way, and whose neighbours are all so paired (a lone
+    vertex can land on another by chance): on a shape whose two sides' vertices mirror each other,
+    the parts a deformation left as they were (the body beside a swung limb). None unless they pair
+    UNMOVED_SHARE of the vertices, nor without triangles.
+    """
+    points = np.asarray(points, dtype=float)
+    none = np.zeros(0, dtype=np.int64)
+    if not len(faces):
+        return none, none, none
+    normals, oriented = vertex_normals(points, faces)
+    partner, side, _ = _seed(points, normals, oriented, cKDTree(points), mean_spacing(points, faces),
+                             normalize(np.asarray(plane_normal, dtype=float)), plane_offset, exact=True)
+    _unpair(partner, side, vertex_adjacency(faces, len(points)) @ (partner < 0).astype(float) > 0)
+    if np.count_nonzero(partner >= 0) < UNMOVED_SHARE * len(points):
+        return none, none, none
+    left = np.flatnonzero(side > 0)
+    return left, partner[left], np.flatnonzero(partner == np.arange(len(points)))
 
 
 def spread_pairs(points: np.ndarray, correspondence: MirrorCorrespondence, count: int,

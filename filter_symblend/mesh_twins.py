@@ -14,12 +14,19 @@ covers nearly the whole mesh when that pair is right, and stops early when it is
 wrong (slid by a row along a regular tessellation, it runs into vertices of other
 valence): so one right seed among many wrong ones is enough (``tessellation_mirror``;
 Blender's "topology mirror" option rests on the same property of such meshes).
+
+Where the triangles nearly mirror (quads split along opposite diagonals on the two
+sides, like pymeshlab's cow), harmonic functions of the mesh graph still carry the
+pairs around an unpaired patch across it, close to where the twins are
+(``harmonic_twin_coordinates``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sparse
+from scipy.sparse.csgraph import connected_components
+from scipy.sparse.linalg import splu
 
 # Share of the closed rings (paired vertices with every neighbour paired) that must map onto their
 # twins' rings. With the true twins: spot 94 % (its midline strip is tessellated one way only),
@@ -182,3 +189,34 @@ def tessellation_mirror(adjacency: sparse.csr_matrix, partner: np.ndarray, side:
         seeds = seeds[grown[0][seeds] != partner[seeds]]
         tried += 1
     return best
+
+
+def harmonic_twin_coordinates(adjacency: sparse.csr_matrix, partner: np.ndarray, points: np.ndarray):
+    """Where the mirror map sends the unpaired vertices, by the connectivity and the pairs around them:
+    (unpaired (u,), mirrored (u, 3), own (u, 3)).
+
+    Both are harmonic in the mesh graph over the unpaired vertices (each at the mean of its
+    neighbours), ``mirrored`` equal to the twin's position ``points`` (N, 3) on the paired vertices,
+    ``own`` to their own position. Where the tessellation mirrors itself the mirror map takes one
+    problem into the other, so the twin's ``own`` is the vertex's ``mirrored``, however the geometry
+    between the pairs is deformed. Where it nearly does (pymeshlab's cow, quads split along opposite
+    diagonals on its two sides), at its joint swung 0.6 rad 86 % of the unpaired vertices have their
+    twin's ``own`` nearest their ``mirrored``, and 47 % their twin nearest the thin-plate spline of the
+    pairs' mirror map. Only unpaired vertices connected to a paired one through unpaired ones are
+    returned.
+    """
+    paired = partner >= 0
+    unpaired = np.flatnonzero(~paired)
+    inner = adjacency[unpaired][:, unpaired]
+    count, component = connected_components(inner, directed=False)
+    touching = np.bincount(component, weights=np.asarray(adjacency[unpaired][:, paired].sum(axis=1)).ravel(),
+                           minlength=count) > 0
+    kept = touching[component]
+    unpaired, inner = unpaired[kept], inner[kept][:, kept]
+    if not len(unpaired):
+        return unpaired, np.zeros((0, 3)), np.zeros((0, 3))
+    degree = np.asarray(adjacency[unpaired].sum(axis=1)).ravel()
+    boundary = adjacency[unpaired][:, np.flatnonzero(paired)]
+    solve = splu((sparse.diags(degree) - inner).tocsc()).solve
+    twins = partner[paired]
+    return unpaired, solve(boundary @ points[twins]), solve(boundary @ points[paired])

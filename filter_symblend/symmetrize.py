@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from .asymmetry import fit_mirror_plane
-from .auto_pairs import first_correspondences, mirror_correspondence, spread_pairs
+from .auto_pairs import first_correspondences, mirror_correspondence, spread_pairs, unmoved_pairs
 from .errors import GeometryError, LandmarkError, ParameterError, SymblendWarning, id_list
 from .geometry import minimal_rotation, normalize, rigid_fit
 from .global_solve import MINUS_X, global_solve
@@ -303,7 +303,9 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
     rejects those whose pairs are not sound, takes the first that pairs GLOBALLY_SYMMETRIC of
     the vertices at once, or else the one with the most mirror-symmetric output. Where the first
     pairing says the two sides' vertices mirror each other (``exact_twins``), the later rounds
-    pair the vertices the growth leaves by an assignment (see ``auto_pairs``).
+    pair the vertices the growth leaves by an assignment, and hold the pairs where the input is
+    still exactly mirror-symmetric (:func:`unmoved_pairs`; on the output they can be off by a
+    vertex, where the solve distorts the surface next to a joint).
     """
     clock = time.perf_counter()
     rounds = options["auto_iterations"]
@@ -329,6 +331,14 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
                  "surface_asymmetry": _surface_asymmetry(result, faces),
                  "local_fit_residual": result.report["local_fit_residual"]["median"]}
         return result, entry
+
+    def unmoved():
+        """The input's :func:`unmoved_pairs`, held in every later round, none on a vertex of ``fixed``."""
+        plane = surface_plane if landmarks is None else fit_surface_mirror_plane(
+            points, initial=fit_mirror_plane(points[user[0]], points[user[1]]))
+        left, right, midline = unmoved_pairs(points, faces, *plane)
+        keep = ~np.isin(left, fixed) & ~np.isin(right, fixed)
+        return left[keep], right[keep], midline[~np.isin(midline, fixed)]
 
     history, candidates = [], {}
     if landmarks is None:
@@ -372,6 +382,7 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
         exact_twins = None  # decided by the first pairing, on the landmarks' output
         first_round, slots = 0, 1
     history.append(entry)
+    held = unmoved() if exact_twins else (no_index, no_index, no_index)
     stopped = "round limit"
     for round_index in range(first_round, rounds):
         start = 5.0 + (round_index + slots) * step
@@ -379,11 +390,13 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
         current = result.points
         # Whether the twins are exact is decided on the first pairing, not on an output: an output is
         # exactly symmetric at its pairs even where the input's two sides are tessellated differently.
+        kept_pairs = (np.concatenate([user[0], held[0]]), np.concatenate([user[1], held[1]]))
         correspondence = mirror_correspondence(current, faces, np.asarray(result.report["plane_normal"]),
-                                               result.report["plane_offset"], (user[0], user[1]), user[3],
-                                               complete=exact_twins)
+                                               result.report["plane_offset"], kept_pairs,
+                                               np.concatenate([user[3], held[2]]), complete=exact_twins)
         if exact_twins is None:
             exact_twins = correspondence.exact_twins
+            held = unmoved() if exact_twins else held
         partner = correspondence.partner
         change = {} if previous is None else {
             "changed_vertices": float(np.mean(partner != previous)),
@@ -412,7 +425,7 @@ def _auto_symmetrize(points: np.ndarray, faces: np.ndarray, landmarks, options: 
               "auto_pairs": {"pair_count": int(result.report["pair_count"] - pair_count),
                              "midline_count": int(result.report["midline_count"] - len(user[3])),
                              "rounds": history, "converged": stopped in ("pairs unchanged", "no gain"),
-                             "exact_twins": bool(exact_twins),
+                             "exact_twins": bool(exact_twins), "unmoved_pairs": int(len(held[0])),
                              "stopped": stopped, "excluded_vertices": int(len(excluded))}}
     if landmarks is None:
         report["auto_pairs"]["first_candidates"] = candidates
