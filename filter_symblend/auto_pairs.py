@@ -37,7 +37,7 @@ from .errors import GeometryError
 from .geometry import MIRROR_X, hemisphere_directions, normalize, proper_rotation_fit, reflection_across_plane, whitening
 from .mesh_geometry import farthest_point_order, mean_spacing, vertex_normals
 from .twin_assignment import assigned_twins
-from .mesh_twins import (_adjacent, _neighbours, connectivity_twins, harmonic_twin_coordinates, mirrored_tessellation,
+from .mesh_twins import (connectivity_twins, harmonic_twin_coordinates, kept_edge_share, mirrored_tessellation,
                          ring_consistent, single_pairs, tessellation_mirror, vertex_adjacency)
 from .registration import registered_mirror_map
 from .spectral import intrinsic_mirror_map
@@ -82,7 +82,7 @@ SPLINE_NEIGHBOURS = 32
 SPLINE_RADIUS = 2.5
 HARMONIC_RADIUS = 1.2
 # The connectivity's twins are taken only if they keep this much more of the mesh's edges than the
-# spline's (see ``_kept_edges``): a slide keeps edges too, and in a broad hole the spline is right more
+# spline's (see ``mesh_twins.kept_edge_share``): a slide keeps edges too, and in a broad hole the spline is right more
 # often (recovering a band of known pairs around the holes: 94-98 % against 70-80 %). Measured, the
 # connectivity's share minus the spline's: the cow's joint swung 0.6 rad +0.16 (10 wrong twins against
 # 66); its whole leg swung 0.3 rad on the output of 20 landmarks -0.09 (128 against 6); the cow bent 0.4
@@ -392,7 +392,7 @@ def _complete_by_assignment(points, normals, oriented, spacing, adjacency, partn
     """Pair the vertices still unpaired (``partner``, ``side`` updated in place; nothing without
     triangles), by :func:`_complete_with` each twin predictor, :func:`_spline_twins` and
     :func:`_harmonic_twins`, keeping the pairs of the spline unless the connectivity's keep
-    HARMONIC_MARGIN more of the mesh's edges (see :func:`_kept_edges`). Returns the number of
+    HARMONIC_MARGIN more of the mesh's edges (see :func:`mesh_twins.kept_edge_share`). Returns the number of
     vertices paired."""
     if adjacency is None:
         return 0
@@ -400,24 +400,10 @@ def _complete_by_assignment(points, normals, oriented, spacing, adjacency, partn
     for predictor, bias in ((_spline_twins, 0.0), (_harmonic_twins, -HARMONIC_MARGIN)):
         trial = partner.copy(), side.copy()
         count = _complete_with(predictor, points, normals, oriented, spacing, adjacency, *trial)
-        trials.append((_kept_edges(adjacency, partner, trial[0]) + bias if count else -1.0, count, trial))
+        trials.append((kept_edge_share(adjacency, partner, trial[0]) + bias if count else -1.0, count, trial))
     _, count, (best_partner, best_side) = max(trials, key=lambda trial: trial[0])
     partner[:], side[:] = best_partner, best_side
     return count
-
-
-def _kept_edges(adjacency, before: np.ndarray, after: np.ndarray) -> float:
-    """Share of the mesh edges from a vertex paired in ``after`` (N,) but not ``before`` (N,) to a paired
-    vertex whose twins share an edge too: 1 for a mirrored tessellation's true twins, less where quads
-    are split along opposite diagonals, less still where the twins slide. Measured on the cow's joint
-    swung 0.6 rad: the connectivity's twins (10 of 184 wrong) 0.85, the spline's (66 of 186) 0.69; on
-    its whole leg swung 0.3 rad, unpaired on the output of 20 landmarks: the spline's (6 of 328) 0.84,
-    the connectivity's (128 of 320) 0.75."""
-    new = np.flatnonzero((before < 0) & (after >= 0))
-    source, neighbour = _neighbours(adjacency, new)
-    paired = after[neighbour] >= 0
-    kept = _adjacent(adjacency, after[new[source[paired]]], after[neighbour[paired]])
-    return float(np.mean(kept)) if len(kept) else 0.0
 
 
 def _spline_twins(points, adjacency, partner, unpaired, paired):

@@ -207,16 +207,29 @@ def harmonic_twin_coordinates(adjacency: sparse.csr_matrix, partner: np.ndarray,
     """
     paired = partner >= 0
     unpaired = np.flatnonzero(~paired)
-    inner = adjacency[unpaired][:, unpaired]
+    rows = adjacency[unpaired]
+    inner, boundary = rows[:, unpaired], rows[:, np.flatnonzero(paired)]
     count, component = connected_components(inner, directed=False)
-    touching = np.bincount(component, weights=np.asarray(adjacency[unpaired][:, paired].sum(axis=1)).ravel(),
-                           minlength=count) > 0
+    touching = np.bincount(component, weights=np.asarray(boundary.sum(axis=1)).ravel(), minlength=count) > 0
     kept = touching[component]
-    unpaired, inner = unpaired[kept], inner[kept][:, kept]
+    unpaired, inner, boundary = unpaired[kept], inner[kept][:, kept], boundary[kept]
     if not len(unpaired):
         return unpaired, np.zeros((0, 3)), np.zeros((0, 3))
-    degree = np.asarray(adjacency[unpaired].sum(axis=1)).ravel()
-    boundary = adjacency[unpaired][:, np.flatnonzero(paired)]
+    degree = np.asarray(rows[kept].sum(axis=1)).ravel()
     solve = splu((sparse.diags(degree) - inner).tocsc()).solve
     twins = partner[paired]
     return unpaired, solve(boundary @ points[twins]), solve(boundary @ points[paired])
+
+
+def kept_edge_share(adjacency: sparse.csr_matrix, before: np.ndarray, after: np.ndarray) -> float:
+    """Share of the mesh edges from a vertex paired in ``after`` (N,) but not ``before`` (N,) to a paired
+    vertex whose twins share an edge too: 1 for a mirrored tessellation's true twins, less where quads
+    are split along opposite diagonals, less still where the twins slide. Measured on the cow's joint
+    swung 0.6 rad: the connectivity's twins (10 of 184 wrong) 0.85, the spline's (66 of 186) 0.69; on
+    its whole leg swung 0.3 rad, unpaired on the output of 20 landmarks: the spline's (6 of 328) 0.84,
+    the connectivity's (128 of 320) 0.75."""
+    new = np.flatnonzero((before < 0) & (after >= 0))
+    source, neighbour = _neighbours(adjacency, new)
+    paired = after[neighbour] >= 0
+    kept = _adjacent(adjacency, after[new[source[paired]]], after[neighbour[paired]])
+    return float(np.mean(kept)) if len(kept) else 0.0

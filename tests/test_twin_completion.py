@@ -316,18 +316,18 @@ def test_the_connectivity_puts_each_twin_where_the_mirrored_tessellation_does_ho
 def test_the_edges_kept_by_completed_twins_tell_true_twins_from_slid_ones():
     """A mirrored tessellation's true twins keep every edge; twins slid to a neighbour's twin do not
     (measured 0.57)."""
-    from filter_symblend.auto_pairs import _kept_edges
+    from filter_symblend.mesh_twins import kept_edge_share
     points, faces = symmetric_blob()
     true_twin = twins(points)
     adjacency = vertex_adjacency(faces, len(points))
     hole = np.flatnonzero(points[:, 2] > 0.5)
     before = true_twin.copy()
     before[hole], before[true_twin[hole]] = -1, -1
-    assert _kept_edges(adjacency, before, true_twin) == 1.0
+    assert kept_edge_share(adjacency, before, true_twin) == 1.0
     slid = true_twin.copy()
     slid[hole] = true_twin[adjacency.indices[adjacency.indptr[hole]]]  # the twin of a neighbour
-    print("edges kept by slid twins:", _kept_edges(adjacency, before, slid))
-    assert _kept_edges(adjacency, before, slid) < 0.75
+    print("edges kept by slid twins:", kept_edge_share(adjacency, before, slid))
+    assert kept_edge_share(adjacency, before, slid) < 0.75
 
 
 def test_a_whole_leg_left_unpaired_is_completed_by_the_spline_not_the_connectivity(cow):
