@@ -7,19 +7,20 @@ Symmetries* (SGP 2010). Importing the package binds
 """
 
 from .errors import (GeometryError, LandmarkError, MeshSetError, ParameterError, SymblendError,
-                     SymblendWarning)
+                     SymblendWarning, SymmetryNotFoundError)
 from .meshset_filter import (ASYMMETRY_ATTRIBUTE, DISPLAY_NAME, FILTER_NAME, bind_to_meshset,
                              generate_symmetrized_mesh)
 from .mlx import ScriptError
 from .parameters import PARAMETERS
 from .script_runner import apply_filter_script, save_filter_script
-from .symmetrize import SymmetrizationResult, symmetrize
+from .pipeline import symmetrize
+from .symmetrize import SymmetrizationResult
 
 bind_to_meshset()
 
 __all__ = [
     "ASYMMETRY_ATTRIBUTE", "DISPLAY_NAME", "FILTER_NAME", "PARAMETERS", "GeometryError",
     "LandmarkError", "MeshSetError", "ParameterError", "ScriptError", "SymblendError", "SymblendWarning",
-    "SymmetrizationResult", "apply_filter_script", "generate_symmetrized_mesh", "save_filter_script",
+    "SymmetrizationResult", "SymmetryNotFoundError", "apply_filter_script", "generate_symmetrized_mesh", "save_filter_script",
     "symmetrize",
 ]

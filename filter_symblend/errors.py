@@ -33,5 +33,9 @@ class GeometryError(SymblendError):
     """The coordinates or the landmark layout make the problem degenerate."""
 
 
+class SymmetryNotFoundError(GeometryError):
+    """Automatic pairs found no mirror symmetry to restore (the shape is not mirror-symmetric)."""
+
+
 class SymblendWarning(UserWarning):
     """A soft problem: the filter ran, but a part of its input looks suspect."""

@@ -9,6 +9,8 @@ from __future__ import annotations
 import numpy as np
 
 MIRROR_X = np.diag([-1.0, 1.0, 1.0])
+FLAT = 1e-9  # a point set whose smallest spread is below this fraction of its largest is flat (2D)
+FLAT_SAMPLES = 20000  # points (evenly strided) that decide whether a point set is flat
 
 
 def normalize(vectors: np.ndarray) -> np.ndarray:
@@ -107,6 +109,22 @@ def voxel_grid(positions: np.ndarray, target: int, steps: int = 20,
     return voxel_keys(positions, high)
 
 
+def flat_normal(points: np.ndarray) -> np.ndarray | None:
+    """The unit normal (3,) of the plane holding every point of ``points`` (N, 3) (a flat, 2D shape), or
+    None if they span 3D. A normal within rounding of a coordinate axis is that axis exactly."""
+    sample = points[:: max(1, len(points) // FLAT_SAMPLES)]
+    if len(sample) < 3:
+        return None
+    _, spread, axes = np.linalg.svd(sample - sample.mean(axis=0), full_matrices=False)
+    if len(spread) < 3 or spread[2] > FLAT * spread[0] or spread[1] <= FLAT * spread[0]:
+        return None
+    normal = axes[2]
+    axis = int(np.argmax(np.abs(normal)))
+    if abs(abs(normal[axis]) - 1.0) < 1e-12:
+        normal = np.eye(3)[axis]
+    return normal
+
+
 def reflection_across_plane(points: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:
     """Mirror images of ``points`` (n, 3) across the plane {x : normal . x = offset}."""
     return points - 2.0 * (points @ normal - offset)[:, None] * normal
@@ -122,7 +140,10 @@ def whitening(points: np.ndarray) -> np.ndarray:
     """
     centred = points - points.mean(axis=0)
     values, vectors = np.linalg.eigh(centred.T @ centred / len(points))
-    return (vectors / np.sqrt(np.maximum(values, 1e-300 * values.max()))) @ vectors.T
+    # A flat shape has no spread along its normal: that direction is scaled as the largest one (any
+    # scale keeps it at zero), so the matrix stays invertible.
+    values = np.where(values > (FLAT * 10) ** 2 * values.max(), values, values.max())
+    return (vectors / np.sqrt(values)) @ vectors.T
 
 
 def hemisphere_directions(count: int) -> np.ndarray:

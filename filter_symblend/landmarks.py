@@ -13,6 +13,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .errors import GeometryError, LandmarkError, id_list
+from .geometry import flat_normal
 
 MIN_PAIRS = 4
 FLAT_RATIO = 1e-6  # landmark spread below this fraction of the largest one counts as flat
@@ -153,8 +154,8 @@ def check_pairs(points: np.ndarray, pairs: LandmarkPairs) -> None:
             "All landmarks lie (nearly) on one line; the symmetry plane and the warp are "
             "undefined. Add pairs away from that line."
         )
-    if spread[2] <= FLAT_RATIO * spread[0]:
+    if spread[2] <= FLAT_RATIO * spread[0] and flat_normal(points) is None:
         raise GeometryError(
-            "All landmarks lie (nearly) on one plane; the 3D warp is undefined. "
-            "Add pairs off that plane."
+            "All landmarks lie (nearly) on one plane, and the mesh does not; the 3D warp is undefined "
+            "off that plane. Add pairs off it."
         )

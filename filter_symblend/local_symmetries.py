@@ -60,9 +60,16 @@ class _Moments:
     left_left: np.ndarray  # sum theta p p^T (n, 3, 3)
     right_right: np.ndarray
     left_right: np.ndarray  # sum theta p q^T
+    flat: np.ndarray | None = None  # the unit normal of a flat (2D) input's plane
 
     def centred(self, left_centre: np.ndarray, right_centre: np.ndarray):
-        """Second moments about per-pair centres: (Cpp, Cqq, Kpq) each (n, 3, 3)."""
+        """Second moments about per-pair centres: (Cpp, Cqq, Kpq) each (n, 3, 3).
+
+        For a flat input every moment is zero along the plane's normal, which no model can tell from
+        a mirror direction. There the moments get a spread along the normal as large as the mean one
+        in the plane, the same on both sides (a mirror across a line of the plane leaves the normal
+        as it is): the local normals then lie in the plane, the stretch stays in it, and a rotation
+        between the sides is one about the normal, which in 2D is a turned mirror line."""
         w = self.weight[:, None, None]
         sl = self.left_mean * self.weight[:, None]
         sr = self.right_mean * self.weight[:, None]
@@ -72,12 +79,17 @@ class _Moments:
                     - a_sum[:, :, None] * b_centre[:, None, :]
                     + w * a_centre[:, :, None] * b_centre[:, None, :])
 
-        return (about(self.left_left, sl, sl, left_centre, left_centre),
-                about(self.right_right, sr, sr, right_centre, right_centre),
-                about(self.left_right, sl, sr, left_centre, right_centre))
+        moments = (about(self.left_left, sl, sl, left_centre, left_centre),
+                   about(self.right_right, sr, sr, right_centre, right_centre),
+                   about(self.left_right, sl, sr, left_centre, right_centre))
+        if self.flat is None:
+            return moments
+        spread = 0.25 * (np.trace(moments[0], axis1=1, axis2=2) + np.trace(moments[1], axis1=1, axis2=2))
+        normal = spread[:, None, None] * np.outer(self.flat, self.flat)
+        return tuple(moment + normal for moment in moments)
 
 
-def _moments(theta: sp.csr_matrix, left: np.ndarray, right: np.ndarray) -> _Moments:
+def _moments(theta: sp.csr_matrix, left: np.ndarray, right: np.ndarray, flat: np.ndarray | None) -> _Moments:
     n = len(left)
 
     def outer(a, b):
@@ -90,7 +102,7 @@ def _moments(theta: sp.csr_matrix, left: np.ndarray, right: np.ndarray) -> _Mome
     return _Moments(
         w, sums[:, 1:4] / w[:, None], sums[:, 4:7] / w[:, None],
         sums[:, 7:16].reshape(n, 3, 3), sums[:, 16:25].reshape(n, 3, 3),
-        sums[:, 25:34].reshape(n, 3, 3),
+        sums[:, 25:34].reshape(n, 3, 3), flat,
     )
 
 
@@ -200,14 +212,16 @@ MODELS = {"standard": _standard, "affine": _affine, "articulated": _articulated}
 
 
 def local_symmetries(
-    mode: str, theta: sp.csr_matrix, left: np.ndarray, right: np.ndarray, pair_ids: np.ndarray
+    mode: str, theta: sp.csr_matrix, left: np.ndarray, right: np.ndarray, pair_ids: np.ndarray,
+    flat: np.ndarray | None = None,
 ) -> LocalSymmetries:
     """Step 1 for every pair at once.
 
     mode: "standard" | "affine" | "articulated". theta (n, n): neighbourhood
     weights. left, right (n, 3): pair positions. pair_ids (n,): labels for messages.
+    flat (3,): the unit normal of the plane holding a flat (2D) input, None otherwise.
     """
-    moments = _moments(theta, left, right)
+    moments = _moments(theta, left, right, flat)
     normals, m_left, m_right, m_gap, left_centre, right_centre, stretch, point_refl = MODELS[mode](
         moments, pair_ids)
     transformed_gap = (np.einsum("nij,nj->ni", m_right, moments.right_mean)

@@ -27,7 +27,8 @@ from .hausdorff import two_way_hausdorff
 from .mirror_fill import fill_from_mirror
 from .parameters import PARAMETERS, keyword_signature, parameters_doc, validate_parameters
 from .surface_symmetry import mirror_asymmetry
-from .symmetrize import SymmetrizationResult, symmetrize
+from .pipeline import symmetrize
+from .symmetrize import SymmetrizationResult
 
 FILTER_NAME = "generate_symmetrized_mesh"
 DISPLAY_NAME = "Symmetrize: Closed-form Blending of Local Symmetries"
@@ -119,7 +120,7 @@ def _fingerprint(mesh: pymeshlab.Mesh, options: dict) -> str:
 def _compute(mesh: pymeshlab.Mesh, options: dict, progress) -> SymmetrizationResult:
     """The whole computation for ``mesh`` (warp, fill, mirror asymmetry before and after); no layer added."""
     region = _missing_region(mesh, options["missing_region"], options["weight_attribute"])
-    core = {p.name: options[p.name] for p in PARAMETERS if not p.adapter_only}
+    core = {p.name: options[p.name] for p in PARAMETERS if p.layer != "meshset"}
     points, faces = mesh.vertex_matrix(), mesh.face_matrix()
     # The fill works in the input frame, where the asymmetry (distance moved) is measured.
     core["output_frame"] = "input"

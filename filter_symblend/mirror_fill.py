@@ -46,26 +46,38 @@ def closest_points_on_triangles(points: np.ndarray, a: np.ndarray, b: np.ndarray
     return result
 
 
-def closest_points_on_surface(vertices: np.ndarray, faces: np.ndarray, queries: np.ndarray) -> np.ndarray:
-    """Closest point (Q, 3) on the triangle surface ``(vertices (V, 3), faces (F, 3))`` to each query.
+def nearest_on_triangles(triangles: np.ndarray, centroid_tree: cKDTree, queries: np.ndarray):
+    """(face (Q,), closest point (Q, 3), distance (Q,)) on the triangles (F, 3, 3) for each query (Q, 3).
 
-    Exact among the ``CANDIDATE_FACES`` triangles whose centroids are nearest
-    the query, which holds on meshes of roughly even triangles. Queries are
-    processed in batches of ``QUERY_CHUNK``.
+    Exact among the ``CANDIDATE_FACES`` triangles whose centroids (``centroid_tree``)
+    are nearest the query, which holds on meshes of roughly even triangles. Queries
+    are processed in batches of ``QUERY_CHUNK``.
     """
-    triangles = vertices[faces]
-    k = min(CANDIDATE_FACES, len(faces))
-    tree = cKDTree(triangles.mean(axis=1))
-    closest = np.empty_like(queries, dtype=float)
+    k = min(CANDIDATE_FACES, len(triangles))
+    face = np.empty(len(queries), dtype=np.int64)
+    closest = np.empty((len(queries), 3))
+    distance = np.empty(len(queries))
     for start in range(0, len(queries), QUERY_CHUNK):
         chunk = queries[start:start + QUERY_CHUNK]
-        _, candidates = tree.query(chunk, k=k)
+        _, candidates = centroid_tree.query(chunk, k=k)
+        candidates = candidates.reshape(len(chunk), k)
         repeated = np.repeat(chunk, k, axis=0)
         chosen = triangles[candidates.reshape(-1)]
         found = closest_points_on_triangles(repeated, chosen[:, 0], chosen[:, 1], chosen[:, 2])
-        best = np.linalg.norm(found - repeated, axis=1).reshape(len(chunk), k).argmin(axis=1)
-        closest[start:start + QUERY_CHUNK] = found.reshape(len(chunk), k, 3)[np.arange(len(chunk)), best]
-    return closest
+        gaps = np.linalg.norm(found - repeated, axis=1).reshape(len(chunk), k)
+        best = gaps.argmin(axis=1)
+        rows = np.arange(len(chunk))
+        face[start:start + len(chunk)] = candidates[rows, best]
+        closest[start:start + len(chunk)] = found.reshape(len(chunk), k, 3)[rows, best]
+        distance[start:start + len(chunk)] = gaps[rows, best]
+    return face, closest, distance
+
+
+def closest_points_on_surface(vertices: np.ndarray, faces: np.ndarray, queries: np.ndarray) -> np.ndarray:
+    """Closest point (Q, 3) on the triangle surface ``(vertices (V, 3), faces (F, 3))`` to each query
+    (see :func:`nearest_on_triangles`)."""
+    triangles = vertices[faces]
+    return nearest_on_triangles(triangles, cKDTree(triangles.mean(axis=1)), queries)[1]
 
 
 def fill_from_mirror(points: np.ndarray, faces: np.ndarray, missing: np.ndarray, plane_normal,

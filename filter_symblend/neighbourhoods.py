@@ -81,7 +81,7 @@ def require_connected(
         return
     main = np.argmax(np.bincount(labels))
     isolated = pair_ids[labels != main]
-    needed = _connecting_width(left, right) / spacing
+    needed = connecting_width(left, right) / spacing
     raise GeometryError(
         f"The landmark pairs fall apart into {count} groups at `{parameter}` = "
         f"{multiple:g}: pairs {id_list(isolated)} are not connected to the other "
@@ -92,7 +92,7 @@ def require_connected(
     )
 
 
-def _connecting_width(left: np.ndarray, right: np.ndarray) -> float:
+def connecting_width(left: np.ndarray, right: np.ndarray) -> float:
     """A Gaussian width h whose truncated graph connects every pair (1% above the smallest).
 
     The longest edge of the minimum spanning tree under the pair distance

@@ -25,9 +25,9 @@ class Parameter:
     """One filter parameter.
 
     kind is "enum", "int", "float" or "string". Numbers have bounds; ``minimum_open``
-    makes the lower bound exclusive. Enums list their ``choices``.
-    ``adapter_only`` parameters are taken by the MeshSet filter, not by the
-    array-level ``symmetrize``.
+    makes the lower bound exclusive. Enums list their ``choices``. ``layer`` says who takes
+    it: "core" the paper's method on arrays, "pairs" where the pairs come from (automatic
+    pairs), "meshset" the MeshSet filter only (attributes, selections).
     """
 
     name: str
@@ -40,7 +40,7 @@ class Parameter:
     minimum: float | None = None
     maximum: float | None = None
     minimum_open: bool = False
-    adapter_only: bool = False  # meaningful only on a MeshSet, not to the array core
+    layer: str = "core"
 
     def validate(self, value: Any) -> Any:
         """Return ``value`` converted to the parameter's type, or raise ParameterError."""
@@ -127,66 +127,55 @@ PARAMETERS: tuple[Parameter, ...] = (
     ),
     Parameter(
         "pairs", "enum", "landmarks", "Pairs",
-        "Where the mirror pairs come from. 'landmarks': the pair attribute (the paper). 'auto': "
-        "found on the surface, no landmarks needed: a vertex-to-vertex mirror correspondence "
-        "seeded by the best mirror plane, by the plane of the whitened shape (compression, "
-        "shear), by registering the shape's reflection onto it (coherent point drift: bends, "
-        "bends with compression) or by the intrinsic mirror map of the Laplace-Beltrami "
-        "eigenfunctions (articulation), grown along the surface with local mirror maps; the "
-        "candidate whose output is most mirror-symmetric is kept, and the pairing is repeated "
-        "on the output while that helps. Alone it suits scans, bends up to 1.2 rad, bends with "
-        "a compression (the paper's Figure 1 included), and swung limbs on meshes whose two "
-        "sides' vertices mirror each other (measured up to 0.6 rad). On a mesh whose triangles "
-        "mirror each other (a mirrored model, a symmetric template warped onto a specimen) the "
-        "mesh's own mirror map, read off its connectivity, pairs every vertex whatever the bend, "
-        "compression or pose. A swung limb on a scan, whose two sides are tessellated "
-        "differently, has not been measured: if its joint stays asymmetric, place about 50 "
-        "landmark pairs and use 'landmarks+auto'. 'landmarks+auto': "
-        "the landmarks are solved first, then automatic pairs found on that output join them "
-        "and the solve is repeated, so the whole surface, not only the landmarks, comes out "
-        "symmetric; the landmarks are always kept and weigh `landmark_priority` times more.",
-        choices=("landmarks", "auto", "landmarks+auto"),
+        "Where the mirror pairs come from. 'landmarks': the pair attribute (the paper). 'auto': found on "
+        "the surface, no landmarks needed. Every vertex's twin is predicted by a mirror map (the best mirror "
+        "plane; where it leaves much of the surface without a mirror image, the whitened plane for a shape "
+        "compressed or sheared as a whole, then the reflection registered onto the shape for a bent one); "
+        "on a mesh whose vertices mirror each other the twins are exact vertices, grown from the sure ones "
+        "along the surface by local mirror maps, elsewhere points of the surface. Then the output is paired "
+        "again, by its own plane, while that changes it. A shape most of whose surface has no mirror image "
+        "under any map is refused. 'landmarks+auto': the landmarks are solved first, then automatic pairs "
+        "found on that output join them and the solve is repeated, so the whole surface, not only the "
+        "landmarks, comes out symmetric; the landmarks are always kept and weigh `landmark_priority` times "
+        "more.",
+        choices=("landmarks", "auto", "landmarks+auto"), layer="pairs",
     ),
     Parameter(
         "auto_pair_count", "int", 3000, "Automatic pair count",
-        "How many automatic pairs (and midline points) to use, spread over the surface by "
-        "farthest-point sampling; fewer if fewer are found. The warp is symmetric where the "
-        "pairs are and interpolated between them: on the cow bent by 0.4 rad, 1000 of its "
-        "1,475 pairs and midline points leave a symmetry error of 0.006 % of the diagonal, all "
-        "of them 0.0005 %.",
-        minimum=10, maximum=100000,
+        "How many automatic pairs (and midline points) enter the solve, spread evenly over the surface; "
+        "fewer if fewer are found. The warp is exactly symmetric at the pairs and interpolates between them.",
+        minimum=10, maximum=100000, layer="pairs",
     ),
     Parameter(
         "auto_iterations", "int", 5, "Automatic pairing rounds",
-        "Most pairing-and-solve rounds for 'auto' and 'landmarks+auto'; the rounds stop earlier "
-        "when fewer than 0.1 % of the vertices change twin, or when a round leaves the output "
-        "less mirror-symmetric (that round is not kept).",
-        minimum=1, maximum=50,
+        "Most pairing-and-solve rounds for 'auto' and 'landmarks+auto'; the rounds stop earlier when the "
+        "output no longer changes, or when a round leaves it less mirror-symmetric (that round is not kept).",
+        minimum=1, maximum=50, layer="pairs",
     ),
     Parameter(
         "landmark_priority", "float", 10.0, "Landmark priority",
         "With 'landmarks+auto': how many times more a landmark pair weighs than an automatic "
         "one in both steps of the solve.",
-        minimum=1.0, maximum=1000.0,
+        minimum=1.0, maximum=1000.0, layer="pairs",
     ),
     Parameter(
         "pair_attribute", "string", "symblend_pair", "Landmark pair attribute",
         "Per-vertex custom scalar attribute holding the pairs: +k on the left vertex "
         "of pair k, -k on the right one, 0 elsewhere.",
-        adapter_only=True,
+        layer="meshset",
     ),
     Parameter(
         "midline_attribute", "string", "symblend_midline", "Midline landmark attribute",
         "Per-vertex custom scalar attribute marking midline landmarks (non-zero on them): they "
         "end up exactly on the symmetry plane. Ignored if the mesh has no such attribute.",
-        adapter_only=True,
+        layer="meshset",
     ),
     Parameter(
         "weight_attribute", "string", "symblend_weight", "Landmark weight attribute",
         "Per-vertex custom scalar attribute in [0, 1] read at the landmarks: 0 marks a missing or "
         "broken landmark, whose side then takes the mirror shape of the other side (the paper's "
         "missing regions). Ignored if the mesh has no such attribute; all weights are 1 then.",
-        adapter_only=True,
+        layer="meshset",
     ),
     Parameter(
         "missing_region", "enum", "none", "Missing region",
@@ -197,7 +186,7 @@ PARAMETERS: tuple[Parameter, ...] = (
         "`meshing_close_holes(newfaceselected=True, refinehole=True)` just added). With 'auto' "
         "or 'landmarks+auto' these vertices are also kept out of the automatic pairs, so that "
         "they do not pull the intact side toward their shape.",
-        choices=("none", "weight", "selection"), adapter_only=True,
+        choices=("none", "weight", "selection"), layer="meshset",
     ),
     Parameter(
         "output_frame", "enum", "input", "Output frame",
@@ -212,12 +201,17 @@ PARAMETERS_BY_NAME = {p.name: p for p in PARAMETERS}
 DEFAULTS = {p.name: p.default for p in PARAMETERS}
 
 
-def validate_parameters(given: dict[str, Any], adapter: bool = True) -> dict[str, Any]:
+CORE = ("core",)
+ARRAYS = ("core", "pairs")
+ALL = ("core", "pairs", "meshset")
+
+
+def validate_parameters(given: dict[str, Any], layers: tuple[str, ...] = ALL) -> dict[str, Any]:
     """Fill defaults, check every value; unknown names raise with the closest valid name.
 
-    With ``adapter=False`` only the array-level parameters are accepted.
+    Only the parameters of ``layers`` are accepted (see :class:`Parameter`).
     """
-    accepted = [p for p in PARAMETERS if adapter or not p.adapter_only]
+    accepted = [p for p in PARAMETERS if p.layer in layers]
     names = [p.name for p in accepted]
     for name in given:
         if name not in names:
@@ -229,11 +223,11 @@ def validate_parameters(given: dict[str, Any], adapter: bool = True) -> dict[str
     return {p.name: p.validate(given.get(p.name, p.default)) for p in accepted}
 
 
-def parameters_doc(adapter: bool = True) -> str:
+def parameters_doc(layers: tuple[str, ...] = ALL) -> str:
     """numpy-style 'Parameters' entries, pymeshlab style: ``name : type = default``."""
     lines = []
     for p in PARAMETERS:
-        if p.adapter_only and not adapter:
+        if p.layer not in layers:
             continue
         lines.append(f"{p.name} : {p.kind} = {p.default!r}")
         unit = f" Unit: {p.unit}." if p.unit else ""
@@ -241,11 +235,11 @@ def parameters_doc(adapter: bool = True) -> str:
     return "\n".join(lines)
 
 
-def keyword_signature(*leading: inspect.Parameter, adapter: bool = True) -> inspect.Signature:
-    """A signature with ``leading`` parameters, then one keyword per declared parameter."""
+def keyword_signature(*leading: inspect.Parameter, layers: tuple[str, ...] = ALL) -> inspect.Signature:
+    """A signature with ``leading`` parameters, then one keyword per declared parameter of ``layers``."""
     keywords = [
         inspect.Parameter(p.name, inspect.Parameter.KEYWORD_ONLY, default=p.default)
-        for p in PARAMETERS if adapter or not p.adapter_only
+        for p in PARAMETERS if p.layer in layers
     ]
     return inspect.Signature([*leading, *keywords])
 

@@ -15,13 +15,15 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .asymmetry import MirrorFit, fit_mirror_plane
-from .geometry import hemisphere_directions, normalize, reflection_across_plane
+from .geometry import flat_normal, hemisphere_directions, normalize, reflection_across_plane
 from .mirror_fill import closest_points_on_surface
 
-ICP_SAMPLES = 20000  # vertices used to fit the plane
+ICP_SAMPLES = 10000  # vertices used to refine the best plane
 ICP_ITERATIONS = 40
 TRIM_FRACTION = 0.8  # correspondences kept per ICP step: the closest 80 %
-SCREEN_SAMPLES = 2000  # vertices used to screen starting planes
+CONVERGED = 1e-5  # ICP stops when its trimmed RMS improves by less than this fraction
+DISTINCT = np.radians(5.0)  # planes whose normals are this far apart are distinct candidates
+SCREEN_SAMPLES = 1000  # vertices used to screen starting planes and to compare the starts
 # Starting planes added to the principal axes' by default: the SCREENED_STARTS most promising of
 # SCREENED_DIRECTIONS spread directions. On the cow under the paper's Figure 1 map (bend 1.2 rad,
 # oblique compression to 0.65, shear 0.15) the principal axes' planes end 14-87 degrees from the
@@ -31,61 +33,107 @@ SCREENED_DIRECTIONS = 200
 SCREENED_STARTS = 3
 
 
-def _refine_plane(points: np.ndarray, tree: cKDTree, normal: np.ndarray, offset: float):
-    """Reflection ICP from one plane; returns (normal, offset, trimmed RMS distance)."""
+def _in_plane(normal: np.ndarray, flat: np.ndarray | None) -> np.ndarray:
+    """``normal`` with its component along the flat normal removed: a flat shape's mirror normal lies in
+    its plane (the plane itself reflects a flat shape onto itself, trivially)."""
+    return normal if flat is None else normalize(normal - (normal @ flat) * flat)
+
+
+def _workers(queries: int) -> int:
+    """Threads for a KD-tree query of ``queries`` points: below about 50,000 starting them costs more."""
+    return -1 if queries > 50_000 else 1
+
+
+def evenly(points: np.ndarray, count: int) -> np.ndarray:
+    """At most ``count`` rows of ``points`` (N, 3), evenly strided."""
+    return points if len(points) <= count else points[np.linspace(0, len(points) - 1, count).astype(np.int64)]
+
+
+def _refine_plane(points: np.ndarray, tree: cKDTree, normal: np.ndarray, offset: float, flat=None):
+    """Reflection ICP from one plane; returns (normal, offset, trimmed RMS distance). Stops when the
+    trimmed RMS improves by less than CONVERGED (relative) or after ICP_ITERATIONS."""
+    best = None
     for _ in range(ICP_ITERATIONS):
-        distance, nearest = tree.query(reflection_across_plane(points, normal, offset))
-        keep = distance <= np.quantile(distance, TRIM_FRACTION)
+        distance, nearest = tree.query(reflection_across_plane(points, normal, offset), workers=_workers(len(points)))
+        cut = np.quantile(distance, TRIM_FRACTION)
+        keep = distance <= cut
+        rms = float(np.sqrt(np.mean(distance[keep] ** 2)))
+        if best is not None and rms >= best[2] * (1.0 - CONVERGED):
+            break
+        best = (normal, offset, rms)
         # points[i] mirrors to near points[nearest[i]]: they are a mirror pair.
         fit = fit_mirror_plane(points[keep], points[nearest[keep]])
-        step = abs(1.0 - abs(fit.normal @ normal)) + abs(abs(fit.offset) - abs(offset))
-        normal, offset = fit.normal, fit.offset
-        if step < 1e-12:
+        fitted = _in_plane(fit.normal, flat)
+        if not np.any(fitted):
             break
-    distance, _ = tree.query(reflection_across_plane(points, normal, offset))
-    trimmed = np.sort(distance)[: max(1, int(TRIM_FRACTION * len(distance)))]
-    return normal, offset, float(np.sqrt(np.mean(trimmed**2)))
+        middle = 0.5 * (points[keep] + points[nearest[keep]])
+        normal, offset = fitted, (fit.offset if flat is None else float(fitted @ middle.mean(axis=0)))
+    return best
 
 
 def fit_surface_mirror_plane(points: np.ndarray, initial: MirrorFit | None = None,
                              axes: np.ndarray | None = None) -> tuple[np.ndarray, float]:
-    """Best mirror plane ``(normal (3,), offset)`` of a point set (N, 3): normal . x = offset.
+    """Best mirror plane ``(normal (3,), offset)`` of a point set (N, 3): normal . x = offset (the first of
+    :func:`surface_mirror_planes`)."""
+    return surface_mirror_planes(points, initial, axes)[0]
+
+
+def surface_mirror_planes(points: np.ndarray, initial: MirrorFit | None = None,
+                          axes: np.ndarray | None = None) -> list[tuple[np.ndarray, float]]:
+    """Mirror planes ``(normal (3,), offset)`` of a point set (N, 3), best first: normal . x = offset.
 
     Starts from the planes through the centroid normal to the rows of ``axes``
     (k, 3) (default the three principal axes, and without ``initial`` the
     SCREENED_STARTS most :func:`promising_normals` too), and from ``initial``
     (e.g. the landmarks' plane; given one, the screening is skipped), refines
-    each by trimmed reflection ICP on at most ``ICP_SAMPLES`` evenly strided
-    vertices, keeps the best.
+    each by trimmed reflection ICP on a sample of SCREEN_SAMPLES vertices, and
+    returns the distinct planes they end in (normals more than DISTINCT apart), by
+    trimmed RMS distance, the best refined again on at most ``ICP_SAMPLES`` evenly
+    strided vertices (a strongly bent shape's own plane can rank second). The normal
+    of a flat point set lies in its plane.
     """
-    sample = points[:: max(1, len(points) // ICP_SAMPLES)]
+    sample = evenly(points, ICP_SAMPLES)
     centre = sample.mean(axis=0)
+    flat = flat_normal(points)
     if axes is None:
         _, _, axes = np.linalg.svd(sample - centre, full_matrices=False)
         if initial is None:
-            screened = promising_normals(points, hemisphere_directions(SCREENED_DIRECTIONS), SCREENED_STARTS)
+            screened = promising_normals(points, hemisphere_directions(SCREENED_DIRECTIONS), SCREENED_STARTS, flat)
             axes = np.vstack([axes, screened])
-    axes = normalize(np.asarray(axes, dtype=float))
-    starts = [(axis, float(axis @ centre)) for axis in axes]
+    axes = normalize(np.array([_in_plane(normalize(axis), flat) for axis in np.asarray(axes, dtype=float)]))
+    starts = [(axis, float(axis @ centre)) for axis in axes if np.any(axis)]
     if initial is not None:
-        starts.insert(0, (normalize(initial.normal), initial.offset))
-    tree = cKDTree(sample)
-    best = min((_refine_plane(sample, tree, n, d) for n, d in starts), key=lambda fit: fit[2])
-    return best[0], best[1]
+        starts.insert(0, (_in_plane(normalize(initial.normal), flat), initial.offset))
+    # Every start on a small sample, then the best one on the large sample (5x faster at scan size).
+    coarse = evenly(sample, SCREEN_SAMPLES)
+    tree = cKDTree(coarse)
+    ends = sorted((_refine_plane(coarse, tree, n, d, flat) for n, d in starts), key=lambda fit: fit[2])
+    distinct = []
+    for normal, offset, _ in ends:
+        if all(abs(normal @ other) < np.cos(DISTINCT) for other, _ in distinct):
+            distinct.append((normal, offset))
+    if len(coarse) < len(sample):
+        distinct[0] = _refine_plane(sample, cKDTree(sample), *distinct[0], flat)[:2]
+    return distinct
 
 
-def promising_normals(points: np.ndarray, normals: np.ndarray, keep: int) -> np.ndarray:
+def promising_normals(points: np.ndarray, normals: np.ndarray, keep: int, flat: np.ndarray | None = None) -> np.ndarray:
     """The ``keep`` rows of ``normals`` (n, 3) whose planes through the centroid reflect a sample of
-    ``points`` (N, 3) closest onto itself (trimmed RMS, one nearest-neighbour query each): cheap
+    ``points`` (N, 3) closest onto itself (trimmed RMS, one nearest-neighbour query for all): cheap
     starts for :func:`fit_surface_mirror_plane` where the principal axes mislead (an oblique
-    compression) or say nothing (a whitened shape)."""
-    sample = points[:: max(1, len(points) // SCREEN_SAMPLES)]
+    compression) or say nothing (a whitened shape). With ``flat``, the normals are taken in the plane."""
+    if flat is not None:
+        normals = normalize(normals - np.outer(normals @ flat, flat))
+        normals = normals[np.linalg.norm(normals, axis=1) > 0.5]
+    sample = evenly(points, SCREEN_SAMPLES)
     centre = sample.mean(axis=0)
-    tree = cKDTree(sample)
-    scores = []
-    for normal in normals:
-        distance, _ = tree.query(reflection_across_plane(sample, normal, float(normal @ centre)))
-        scores.append(np.quantile(distance, TRIM_FRACTION))
+    heights = (sample - centre) @ normals.T  # (m, n)
+    mirrored = sample[None, :, :] - 2.0 * heights.T[:, :, None] * normals[:, None, :]  # (n, m, 3)
+    # Far reflections cost a KD-tree most; beyond a quarter of the extent a plane is poor anyway.
+    cap = 0.25 * float(np.ptp(sample, axis=0).max())
+    distance, _ = cKDTree(sample).query(mirrored.reshape(-1, 3), distance_upper_bound=cap,
+                                  workers=_workers(len(normals) * len(sample)))
+    scores = np.quantile(np.minimum(distance, cap).reshape(len(normals), len(sample)), TRIM_FRACTION, axis=1)
     return normals[np.argsort(scores)[:keep]]
 
 

@@ -157,3 +157,76 @@ def spread_pairs(points: np.ndarray, offset: float, partner: np.ndarray, count: 
     _, first = np.unique(keys, return_index=True)
     left = candidates[np.sort(first)]
     return left, partner[left]
+
+
+def icosphere(subdivisions: int = 3) -> tuple[np.ndarray, np.ndarray]:
+    """A unit sphere triangulated from a subdivided icosahedron: (points (N, 3), faces (F, 3)). Its
+    vertex set and its triangles are closed under x -> -x (and y, z): a mirrored tessellation."""
+    t = (1.0 + np.sqrt(5.0)) / 2.0
+    points = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
+              (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    faces = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
+             (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11),
+             (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    points, faces = [np.array(p, dtype=float) / np.linalg.norm(p) for p in points], np.array(faces)
+    for _ in range(subdivisions):
+        middle: dict[tuple[int, int], int] = {}
+
+        def midpoint(a: int, b: int) -> int:
+            key = (min(a, b), max(a, b))
+            if key not in middle:
+                point = points[a] + points[b]
+                points.append(point / np.linalg.norm(point))
+                middle[key] = len(points) - 1
+            return middle[key]
+
+        finer = []
+        for a, b, c in faces:
+            ab, bc, ca = midpoint(a, b), midpoint(b, c), midpoint(c, a)
+            finer += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        faces = np.array(finer)
+    return np.array(points), faces
+
+
+def bumpy(points: np.ndarray) -> np.ndarray:
+    """A unit sphere's points pushed out by bumps even in x and in nothing else: one mirror plane, x = 0."""
+    x, y, z = points.T
+    return points * (1.0 + 0.25 * np.cos(3.0 * x) * np.exp(y) + 0.2 * z**3 + 0.15 * x**2 * y)[:, None]
+
+
+def several_pieces(subdivisions: int = 3) -> tuple[np.ndarray, np.ndarray]:
+    """An exactly mirror-symmetric (x = 0) closed mesh of five separate pieces: a bumpy body, a lid and a
+    spout on the plane (each its own mirror image), and two ears, each the other's mirror image."""
+    sphere, faces = icosphere(subdivisions)
+    small, small_faces = icosphere(max(1, subdivisions - 1))
+    ear = small * 0.25 + [0.95, 0.55, -0.3]
+    pieces = [(bumpy(sphere) * [1.0, 0.8, 1.2], faces),
+              (small * [0.35, 0.2, 0.35] + [0.0, 1.15, 0.0], small_faces),
+              (small * [0.15, 0.15, 0.45] + [0.0, 0.1, 1.75], small_faces),
+              (ear, small_faces), (ear * [-1.0, 1.0, 1.0], small_faces[:, ::-1])]
+    points, triangles, count = [], [], 0
+    for piece_points, piece_faces in pieces:
+        points.append(piece_points)
+        triangles.append(piece_faces + count)
+        count += len(piece_points)
+    return np.vstack(points), np.vstack(triangles)
+
+
+def cropped(points: np.ndarray, faces: np.ndarray, keep: np.ndarray):
+    """The mesh restricted to the vertices ``keep`` (N,) bool: (points, faces, kept vertex indices); faces
+    with a vertex left out go too (a scan with one side cut away)."""
+    index = np.full(len(points), -1)
+    index[keep] = np.arange(np.count_nonzero(keep))
+    inside = keep[faces].all(axis=1)
+    return points[keep], index[faces[inside]], np.flatnonzero(keep)
+
+
+def with_seams(points: np.ndarray, faces: np.ndarray, selected: np.ndarray):
+    """The mesh with the vertices of the ``selected`` (F,) bool faces duplicated for them (as UV seams split an
+    OBJ): (points (N + k, 3), faces); copies sit exactly on their originals."""
+    used = np.unique(faces[selected])
+    copies = np.full(len(points), -1)
+    copies[used] = len(points) + np.arange(len(used))
+    faces = faces.copy()
+    faces[selected] = copies[faces[selected]]
+    return np.vstack([points, points[used]]), faces

@@ -172,9 +172,34 @@ class ApproximateThinPlateSpline:
         return out
 
 
-def thin_plate_spline(centres: np.ndarray, values: np.ndarray):
+class PlanarThinPlateSpline:
+    """For a flat (2D) input, the thin-plate spline of the plane (kernel r^2 log r, an affine part): the 3D
+    spline's affine part is undefined on centres in one plane. ``values`` (k, 3) are displacements in
+    the plane of ``centres`` (k, 3), whose unit normal is ``flat`` (3,); scipy's RBFInterpolator fits and
+    evaluates it in the plane's coordinates."""
+
+    def __init__(self, centres: np.ndarray, values: np.ndarray, flat: np.ndarray):
+        from scipy.interpolate import RBFInterpolator
+
+        self._origin = centres.mean(axis=0)
+        self._basis = np.linalg.svd(np.eye(3) - np.outer(flat, flat))[0][:, :2]  # (3, 2): the plane's axes
+        self._spline = RBFInterpolator((centres - self._origin) @ self._basis, values @ self._basis,
+                                       kernel="thin_plate_spline", degree=1)
+        self.coarse_count = len(centres)
+
+    def __call__(self, points: np.ndarray, progress: Callable[[float], None] | None = None) -> np.ndarray:
+        out = self._spline((points - self._origin) @ self._basis) @ self._basis.T
+        if progress is not None:
+            progress(1.0)
+        return out
+
+
+def thin_plate_spline(centres: np.ndarray, values: np.ndarray, flat: np.ndarray | None = None):
     """The spline through ``values`` (k, d) at ``centres`` (k, 3): exact up to EXACT_CENTRES
-    landmarks, ApproximateThinPlateSpline above."""
+    landmarks, ApproximateThinPlateSpline above; in the plane for a flat input (``flat``: its
+    unit normal)."""
+    if flat is not None:
+        return PlanarThinPlateSpline(centres, values, flat)
     if len(centres) <= EXACT_CENTRES:
         return ThinPlateSpline(centres, values)
     return ApproximateThinPlateSpline(centres, values)

@@ -14,6 +14,8 @@ Seconds are the filter's own stage timings (median of --repeat runs).
     python scripts/benchmark.py --scale      # speed and memory at scale, and the paper's Table 1
     python scripts/benchmark.py --auto       # automatic pairs against 100 landmark pairs, landmarks+auto with
                                              # 10-100 landmarks, automatic pairs on the Igea scan
+    python scripts/benchmark.py --corpus     # pairs='auto' on every mesh of ../shared/data and pymeshlab's
+                                             # samples, as given and deformed; synthetic meshes as they come
 """
 
 from __future__ import annotations
@@ -28,17 +30,16 @@ import warnings
 import numpy as np
 import pymeshlab
 
-from filter_symblend import GeometryError, SymblendWarning, symmetrize, synthetic, warp
+from filter_symblend import GeometryError, SymblendError, SymblendWarning, symmetrize, synthetic, warp
 from filter_symblend.baseline import mirror_average
 from filter_symblend.global_solve import global_solve
 from filter_symblend.local_symmetries import local_symmetries
 from filter_symblend.neighbourhoods import mean_nearest_spacing, pair_weights, require_connected
 
-MESHES = {
-    "cow": pathlib.Path(pymeshlab.__file__).parent / "tests" / "sample_meshes" / "cow.obj",
-    "spot": pathlib.Path(__file__).resolve().parents[2] / "shared" / "data" / "spot.obj",
-}
-IGEA = pathlib.Path(__file__).resolve().parents[2] / "shared" / "data" / "igea.ply"
+SAMPLES = pathlib.Path(pymeshlab.__file__).parent / "tests" / "sample_meshes"
+SHARED = pathlib.Path(__file__).resolve().parents[2] / "shared" / "data"
+MESHES = {"cow": SAMPLES / "cow.obj", "spot": SHARED / "spot.obj"}
+IGEA = SHARED / "igea.ply"
 # Table 1 of the paper: model, user-placed + automatic pairs, seconds (dual-core 2.4 GHz, 2010).
 TABLE_1 = [("Bunny", 190, 6.61), ("Igea", 260, 7.6), ("Dragon", 944, 173.5), ("Hominid", 520, 38.5),
            ("Paradol", 722, 90.8), ("Vic", 243, 8.41), ("Ben", 935, 109.48), ("Armadillo", 606, 63.45),
@@ -359,6 +360,151 @@ def auto_scans() -> None:
               f"{100 * hausdorff['max'] / diagonal:.2f} / {100 * hausdorff['mean'] / diagonal:.3f} |", flush=True)
 
 
+CORPUS_FILES = [SHARED / name for name in ("spot.obj", "woody.obj", "homer.obj", "cheburashka.obj", "fandisk.obj",
+                                            "rocker-arm.obj", "stanford-bunny.obj", "igea.ply")] + \
+    [SAMPLES / name for name in ("cow.obj", "bone.ply", "bunny.obj", "airplane.obj", "cube.obj")]
+# Known deformations of the exactly symmetric meshes: name, map, mode a user would choose.
+CORPUS_DEFORMATIONS = [
+    ("random pose", lambda p: p, "affine"),
+    ("bend 0.2 rad", lambda p: synthetic.bend(p, 0.2), "affine"),
+    ("bend 0.6 rad", lambda p: synthetic.bend(p, 0.6), "affine"),
+    ("bend 1.2 rad", lambda p: synthetic.bend(p, 1.2), "affine"),
+    ("bend 0.4 + compression 0.85", lambda p: synthetic.compress(synthetic.bend(p, 0.4), [1, 1, 0], 0.85, shear=0.05),
+     "affine"),
+    ("Figure 1", synthetic.figure_1_deformation, "affine"),
+]
+
+
+def _referenced(faces: np.ndarray, count: int) -> np.ndarray:
+    used = np.zeros(count, dtype=bool)
+    used[faces.ravel()] = True
+    return used if len(faces) else np.ones(count, dtype=bool)
+
+
+def _pieces(faces: np.ndarray, count: int) -> int:
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    if not len(faces):
+        return count
+    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]]])
+    labels = connected_components(coo_matrix((np.ones(len(edges)), edges.T), shape=(count, count)), directed=False)[1]
+    return len(np.unique(labels[_referenced(faces, count)]))
+
+
+def _outline_distances(points: np.ndarray, faces: np.ndarray, normal, offset) -> np.ndarray:
+    """A flat mesh's asymmetry is its outline's: distance from each boundary vertex to the reflected
+    boundary (edges used by one triangle), by closest points on the edges as thin triangles."""
+    from filter_symblend.geometry import reflection_across_plane
+    from filter_symblend.mirror_fill import closest_points_on_surface
+    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    unique, counts = np.unique(edges, axis=0, return_counts=True)
+    boundary = unique[counts == 1]
+    mirrored = reflection_across_plane(points, np.asarray(normal), offset)
+    segments = np.column_stack([boundary, boundary[:, 1]])  # degenerate triangles: the edges themselves
+    vertices = np.unique(boundary)
+    return np.linalg.norm(closest_points_on_surface(mirrored, segments, points[vertices]) - points[vertices], axis=1)
+
+
+def mirror_statistics(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """RMS, median and 90th percentile (% of the diagonal) of the distance from each referenced vertex to
+    the surface reflected across its best mirror plane, fitted afresh (an independent measure); for a flat
+    mesh, from each vertex of its outline to the reflected outline."""
+    from filter_symblend.geometry import flat_normal
+    from filter_symblend.surface_symmetry import fit_surface_mirror_plane, mirror_distances
+    used = _referenced(faces, len(points))
+    plane = fit_surface_mirror_plane(points[used])
+    if len(faces) and flat_normal(points[used]) is not None:
+        distance = _outline_distances(points, faces, *plane)
+    else:
+        distance = mirror_distances(points, faces, *plane)[used]
+    diagonal = np.linalg.norm(np.ptp(points[used], axis=0))
+    return 100 * np.array([np.sqrt(np.mean(distance**2)), np.median(distance), np.quantile(distance, 0.9)]) / diagonal
+
+
+def surface_hausdorff(before: np.ndarray, after: np.ndarray, faces: np.ndarray) -> float:
+    """Two-way Hausdorff distance between two embeddings of one mesh, sampled at the referenced vertices,
+    % of the diagonal."""
+    from filter_symblend.mirror_fill import closest_points_on_surface
+    used = _referenced(faces, len(before))
+    if not len(faces):
+        return 100 * float(np.abs(before - after).max()) / np.linalg.norm(np.ptp(before, axis=0))
+    one = np.linalg.norm(closest_points_on_surface(after, faces, before[used]) - before[used], axis=1).max()
+    other = np.linalg.norm(closest_points_on_surface(before, faces, after[used]) - after[used], axis=1).max()
+    return 100 * max(one, other) / np.linalg.norm(np.ptp(before[used], axis=0))
+
+
+def corpus_cases():
+    """(mesh, case, points, faces, mode, ground truth or None): every corpus file as given, the exactly
+    symmetric ones deformed, and synthetic meshes as real ones come (pieces, a cropped side, seams)."""
+    for path in CORPUS_FILES:
+        if not path.exists():
+            yield path.name, f"skipped: {path} is absent", None, None, None, None
+            continue
+        ms = pymeshlab.MeshSet()
+        ms.load_new_mesh(str(path))
+        mesh = ms.current_mesh()
+        yield path.name, "as given", mesh.vertex_matrix(), mesh.face_matrix(), "standard", None
+    exact = [(name, *load(MESHES[name])) for name in ("cow", "spot") if MESHES[name].exists()]
+    pieces_points, pieces_faces = synthetic.several_pieces(3)
+    offset, partner = synthetic.mirror_partners(pieces_points)
+    left = np.flatnonzero((partner >= 0) & (pieces_points[:, 0] > offset))
+    exact.append(("several pieces", pieces_points, offset, partner, left, partner[left], pieces_faces))
+    for name, points, offset, partner, all_left, all_right, faces in exact:
+        for case, deform, mode in CORPUS_DEFORMATIONS:
+            yield name, case, synthetic.random_rigid(deform(points), 7), faces, mode, (points, offset, partner,
+                                                                                       all_left, all_right)
+    if MESHES["spot"].exists():
+        points, offset, partner, _, _, faces = load(MESHES["spot"])
+        keep = points[:, 0] > offset - 0.6 * (points[:, 0].max() - offset)
+        cut, cut_faces, _ = synthetic.cropped(points, faces, keep)
+        yield "spot, 60 % of one side cut away", "bend 0.4 rad", synthetic.random_rigid(synthetic.bend(cut, 0.4), 7), \
+            cut_faces, "affine", None
+        seamed, seamed_faces = synthetic.with_seams(points, faces, points[faces].mean(axis=1)[:, 1] > np.median(points[:, 1]))
+        yield "spot with seams (duplicated vertices)", "bend 0.4 rad", \
+            synthetic.random_rigid(synthetic.bend(seamed, 0.4), 7), seamed_faces, "affine", None
+
+
+def corpus_main() -> None:
+    """pairs='auto' over the corpus: status, time, mirror distance before/after, shape kept, and for the
+    exactly symmetric meshes the symmetry error over every true pair against 100 landmark pairs."""
+    print("pairs='auto' over the corpus: mirror distance to the reflected surface (RMS / median / 90th percentile, "
+          "% of the diagonal), two-way Hausdorff input<->output (% of the diagonal), symmetry error over all "
+          "true pairs: auto / 100 landmark pairs (%) and their ratio (target <= 0.2)")
+    print("| mesh | case | vertices | pieces | mode | s | status | before | after | Hausdorff | auto / 100 landmarks |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for mesh, case, points, faces, mode, truth in corpus_cases():
+        if points is None:
+            print(f"| {mesh} | {case} |")
+            continue
+        cells = [mesh, case, f"{len(points):,}", str(_pieces(faces, len(points))), mode]
+        start = time.perf_counter()
+        try:
+            result = symmetrize(points, faces=faces, pairs="auto", mode=mode)
+            output = result.points
+            status = "ok" if np.isfinite(output).all() else "NON-FINITE"
+        except SymblendError as error:
+            output, status = None, "refused: " + " ".join(str(error).split())
+        except Exception as error:  # noqa: BLE001  (the corpus counts crashes; it must not stop at one)
+            output, status = None, f"CRASH {type(error).__name__}: {error}"
+        cells += [f"{time.perf_counter() - start:.1f}", status, "/".join(f"{v:.3f}" for v in mirror_statistics(points, faces))]
+        if output is None or status != "ok":
+            cells += ["-", "-", "-"]
+        else:
+            cells += ["/".join(f"{v:.3f}" for v in mirror_statistics(output, faces)), f"{surface_hausdorff(points, output, faces):.3f}"]
+            if truth is None:
+                cells.append("")
+            else:
+                reference, offset, partner, all_left, all_right = truth
+                left, right = synthetic.farthest_point_pairs(reference, offset, partner, 100)
+                landmarks = symmetrize(points, left, right, mode=mode).points
+                auto_error = synthetic.symmetry_error(output, all_left, all_right)
+                landmark_error = synthetic.symmetry_error(landmarks, all_left, all_right)
+                moved = np.abs(output - points).max() / np.linalg.norm(np.ptp(points, axis=0))
+                ratio = f"{auto_error / landmark_error:.3f}" if landmark_error > EXACT else f"output moved {moved:.1e}"
+                cells.append(f"{100 * auto_error:.4f} / {100 * landmark_error:.4f} ({ratio})")
+        print("| " + " | ".join(cells) + " |", flush=True)
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--pairs", type=int, nargs="+", default=[100, 300, 1000])
@@ -366,6 +512,7 @@ def main(argv=None) -> None:
     parser.add_argument("--meshes", nargs="+", default=list(MESHES), choices=list(MESHES))
     parser.add_argument("--scale", action="store_true", help="speed and memory at scale, and Table 1")
     parser.add_argument("--auto", action="store_true", help="automatic pairs against 100 landmark pairs")
+    parser.add_argument("--corpus", action="store_true", help="automatic pairs over every corpus mesh")
     parser.add_argument("--levels", type=int, default=4, help="--scale: subdivisions of the cow (4: 743k vertices)")
     parser.add_argument("--scale-pairs", type=int, nargs="+", default=[100, 1000, 10000, 100000])
     parser.add_argument("--warp-pairs", type=int, nargs="+", default=[2000, 20000],
@@ -374,6 +521,9 @@ def main(argv=None) -> None:
     warnings.simplefilter("ignore", SymblendWarning)
     if args.scale:
         scale_main(args)
+        return
+    if args.corpus:
+        corpus_main()
         return
     if args.auto:
         auto_main(args)

@@ -62,6 +62,23 @@ def symmetric_mesh(request) -> GroundTruth:
     return load_ground_truth(path)
 
 
+def symmetric_blob(subdivisions: int = 4):
+    """An exactly mirror-symmetric closed mesh with one mirror plane (x = 0): pymeshlab's icosphere (whose
+    vertex set and triangles are closed under x -> -x) with bumps even in x but not in y or z. (points, faces)"""
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=subdivisions)
+    mesh = ms.current_mesh()
+    return synthetic.bumpy(mesh.vertex_matrix()), mesh.face_matrix()
+
+
+def twins(points: np.ndarray) -> np.ndarray:
+    """The exact mirror twin (N,) of every vertex across x = 0."""
+    from scipy.spatial import cKDTree
+    distance, twin = cKDTree(points).query(points * [-1.0, 1.0, 1.0])
+    assert distance.max() < 1e-9
+    return twin
+
+
 def meshset_with_pairs(points, faces, left, right, attribute="symblend_pair") -> pymeshlab.MeshSet:
     """A MeshSet whose current mesh carries the pair attribute (+k left, -k right)."""
     ms = pymeshlab.MeshSet()

@@ -1,6 +1,6 @@
-"""Automatic mirror pairs: exact on exactly symmetric shapes, dense on landmark runs, clear errors."""
+"""Automatic pairs: exact on exactly symmetric shapes, better than landmarks on deformed ones, real meshes as
+they come (pieces, seams, a cropped side, a flat shape, a point cloud), refusals, clear errors."""
 
-import re
 import warnings
 
 import numpy as np
@@ -9,158 +9,296 @@ import pytest
 
 import filter_symblend  # noqa: F401  (binds the filter)
 from filter_symblend import (GeometryError, LandmarkError, ParameterError, SymblendError, SymblendWarning,
-                             symmetrize, synthetic)
-from filter_symblend.auto_pairs import mirror_correspondence
+                             SymmetryNotFoundError, symmetrize, synthetic)
+from filter_symblend.auto import AutoConfig
+from filter_symblend.auto.maps import plane_map
+from filter_symblend.auto.surface import Surface
+from filter_symblend.auto.twins import find_twins
 from filter_symblend.mesh_geometry import mean_spacing, vertex_normals
 from filter_symblend.mirror_fill import closest_points_on_surface
 from filter_symblend.surface_symmetry import mirror_asymmetry
 
-from conftest import SHARED_DATA, meshset_with_pairs
+from conftest import SAMPLE_MESHES, SHARED_DATA, load_ground_truth, meshset_with_pairs, symmetric_blob, twins
 
-
-def symmetric_blob(subdivisions: int = 4):
-    """An exactly mirror-symmetric closed mesh with one mirror plane (x = 0): an icosphere (whose
-    vertex set is closed under x -> -x) with bumps that are even in x but not in y or z."""
-    ms = pymeshlab.MeshSet()
-    ms.create_sphere(subdiv=subdivisions)
-    mesh = ms.current_mesh()
-    points, faces = mesh.vertex_matrix(), mesh.face_matrix()
-    x, y, z = points.T
-    radius = 1.0 + 0.25 * np.cos(3.0 * x) * np.exp(y) + 0.2 * z**3 + 0.15 * x**2 * y
-    return points * radius[:, None], faces
-
-
-def twins(points):
-    """The exact mirror twin of every vertex across x = 0."""
-    from scipy.spatial import cKDTree
-    distance, twin = cKDTree(points).query(points * [-1.0, 1.0, 1.0])
-    assert distance.max() < 1e-9
-    return twin
+TARGET = 0.2  # the issue's target: at most a fifth of the symmetry error of 100 landmark pairs
 
 
 @pytest.fixture(scope="module")
 def blob():
-    return symmetric_blob()
+    return symmetric_blob(4)
 
 
-def test_an_exactly_symmetric_mesh_in_a_random_pose_is_unchanged_and_its_plane_found(blob):
+def _quiet_symmetrize(*args, **kwargs):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SymblendWarning)
+        return symmetrize(*args, **kwargs)
+
+
+def test_an_exactly_symmetric_mesh_in_any_pose_comes_back_unchanged(blob):
     points, faces = blob
     diagonal = np.linalg.norm(np.ptp(points, axis=0))
-    rng = np.random.default_rng(3)
-    for seed in (1, 2):
+    for seed, mode in ((1, "standard"), (2, "affine")):
         posed = synthetic.random_rigid(points, seed)
         rotation = np.linalg.lstsq(np.column_stack([points, np.ones(len(points))]), posed, rcond=None)[0][:3].T
-        result = symmetrize(posed, faces=faces, pairs="auto", mode=rng.choice(["standard", "affine"]))
+        result = symmetrize(posed, faces=faces, pairs="auto", mode=mode)
         assert np.abs(result.points - posed).max() < 1e-6 * diagonal
-        true_normal = rotation @ [1.0, 0.0, 0.0]
-        angle = np.degrees(np.arccos(min(1.0, abs(np.dot(result.report["plane_normal"], true_normal)))))
+        angle = np.degrees(np.arccos(min(1.0, abs(np.dot(result.report["plane_normal"], rotation @ [1.0, 0, 0])))))
         assert angle < 0.1
         auto = result.report["auto_pairs"]
-        assert auto["converged"] and auto["pair_count"] > 500 and auto["midline_count"] > 0
-        assert len(auto["rounds"]) == 2 and auto["rounds"][1]["changed_vertices"] == 0.0
+        assert auto["stopped"] == "converged" and auto["twins_are"] == "exact vertices" and auto["midline_count"] > 0
 
 
-def test_the_correspondence_of_a_symmetric_mesh_is_its_exact_mirror_map(blob):
+def test_a_plane_gives_an_exactly_symmetric_mesh_its_exact_mirror_vertices(blob):
     points, faces = blob
-    correspondence = mirror_correspondence(points, faces, [1.0, 0.0, 0.0], 0.0)
+    surface = Surface(points, faces)
+    twins_found = find_twins(plane_map(surface, [1.0, 0.0, 0.0], 0.0), surface.usable_index)
+    exact = twins_found.exact_vertex(AutoConfig(), 1e-9)
+    assert exact.all()
+    np.testing.assert_array_equal(twins_found.vertex, twins(points)[surface.usable_index])
+    off_plane = np.abs(points[surface.usable_index, 0]) > 1e-9
+    np.testing.assert_array_equal(twins_found.side[off_plane], np.sign(points[surface.usable_index, 0])[off_plane])
+
+
+@pytest.fixture(scope="module")
+def cow_100_landmarks(cow):
+    return cow.landmarks(100)
+
+
+def _against_landmarks(truth, deformed, landmarks, mode="affine"):
+    """(auto result, symmetry error over every true pair of: auto, 100 landmarks; shape error of both)."""
+    automatic = symmetrize(deformed, faces=truth.faces, pairs="auto", mode=mode)
+    alone = _quiet_symmetrize(deformed, *landmarks, mode=mode)
+    errors = [synthetic.symmetry_error(out, truth.all_left, truth.all_right) for out in (automatic.points, alone.points)]
+    shapes = [synthetic.shape_error(out, truth.points) for out in (automatic.points, alone.points)]
+    return automatic, errors, shapes
+
+
+@pytest.mark.parametrize("deformation", ["bend 0.6 rad", "Figure 1"])
+def test_a_bent_or_bent_and_compressed_cow_beats_100_landmarks_five_times(cow, cow_100_landmarks, deformation):
+    deform = {"bend 0.6 rad": lambda p: synthetic.bend(p, 0.6), "Figure 1": synthetic.figure_1_deformation}[deformation]
+    deformed = synthetic.random_rigid(deform(cow.points), seed=7)
+    automatic, errors, shapes = _against_landmarks(cow, deformed, cow_100_landmarks)
+    print(deformation, "symmetry error auto / 100 landmarks:", errors, "shape:", shapes)
+    assert errors[0] < TARGET * errors[1]
+    assert shapes[0] <= shapes[1]
+    assert automatic.report["auto_pairs"]["twins_are"] == "exact vertices"
+
+
+def test_a_strongly_bent_mirrored_tessellation_comes_back_exactly_symmetric():
+    """Spot's triangles mirror each other: bent by 1.2 rad, its tessellation's own mirror map pairs every
+    vertex with its true twin, where the geometric maps alone do not reach half the surface."""
+    path = SHARED_DATA / "spot.obj"
+    if not path.exists():
+        pytest.skip(f"{path} is absent (shared test data not available)")
+    spot = load_ground_truth(path)
+    deformed = synthetic.random_rigid(synthetic.bend(spot.points, 1.2), seed=7)
+    result = symmetrize(deformed, faces=spot.faces, pairs="auto", mode="affine")
+    coverage = result.report["auto_pairs"]["coverage"]
+    assert coverage["tessellation mirror"] == 1.0 and max(coverage.values()) == 1.0
+    assert synthetic.symmetry_error(result.points, spot.all_left, spot.all_right) < 1e-9
+
+
+def test_several_pieces_each_paired_with_its_mirror_piece_or_itself():
+    """Five separate closed pieces (a body, a lid and a spout on the plane, two ears each other's mirror
+    image), bent: the pieces come back symmetric, the ears with each other."""
+    points, faces = synthetic.several_pieces(3)
+    offset, partner = synthetic.mirror_partners(points)
+    left = np.flatnonzero((partner >= 0) & (points[:, 0] > offset))
+    bent = synthetic.random_rigid(synthetic.bend(points, 0.6), seed=3)
+    result = symmetrize(bent, faces=faces, pairs="auto", mode="affine")
+    before, after = (synthetic.symmetry_error(p, left, partner[left]) for p in (bent, result.points))
+    ears = np.flatnonzero(np.linalg.norm(points - [0.95, 0.55, -0.3], axis=1) < 0.3)
+    ear_error = synthetic.symmetry_error(result.points, ears, partner[ears])
+    print("symmetry error before / after, ears after:", before, after, ear_error)
+    assert np.isfinite(result.points).all()
+    assert after < 0.02 * before and ear_error < 0.02 * before
+
+
+def test_a_cropped_side_pairs_only_where_a_counterpart_exists(cow):
+    """The cow with 40 % of one side cut away, bent: where both sides exist it comes back symmetric, and
+    what lost its counterpart follows the warp."""
+    span = cow.points[:, 0].max() - cow.offset
+    keep = cow.points[:, 0] > cow.offset - 0.6 * span
+    cut, cut_faces, kept = synthetic.cropped(cow.points, cow.faces, keep)
+    bent = synthetic.bend(cut, 0.3)
+    result = symmetrize(bent, faces=cut_faces, pairs="auto", mode="affine")
+    index = np.full(len(cow.points), -1)
+    index[kept] = np.arange(len(kept))
+    twin = np.maximum(cow.partner, 0)
+    both = np.flatnonzero(keep & (cow.partner >= 0) & keep[twin] & (cow.points[:, 0] > cow.offset))
+    left, right = index[both], index[twin[both]]
+    before, after = (synthetic.symmetry_error(p, left, right) for p in (bent, result.points))
+    print("symmetry error where both sides exist, before / after:", before, after)
+    assert np.isfinite(result.points).all() and after < 0.05 * before
+    alone = index[np.flatnonzero(keep & ~keep[twin])]  # vertices whose counterpart was cut away
+    moved = np.linalg.norm(result.points[alone] - bent[alone], axis=1).max()
+    assert moved < 0.2 * np.linalg.norm(np.ptp(cut, axis=0))  # they follow, they do not fly off
+
+
+def test_duplicated_vertices_move_with_their_originals(blob):
+    points, faces = blob
+    seamed, seamed_faces = synthetic.with_seams(points, faces, points[faces].mean(axis=1)[:, 2] > 0.2)
+    copies = len(seamed) - len(points)
+    original = np.unique(faces[points[faces].mean(axis=1)[:, 2] > 0.2])
+    bent = synthetic.bend(seamed, 0.3)
+    result = symmetrize(bent, faces=seamed_faces, pairs="auto", mode="affine")
+    assert copies > 100
+    np.testing.assert_array_equal(result.points[len(points):], result.points[original])
     twin = twins(points)
-    paired = correspondence.partner >= 0
-    assert paired.mean() > 0.99
-    np.testing.assert_array_equal(correspondence.partner[paired], twin[paired])
-    on_left = paired & (twin != np.arange(len(points)))
-    np.testing.assert_array_equal(correspondence.side[on_left], np.sign(points[on_left, 0]))
+    left = np.flatnonzero(points[:, 0] > 1e-9)
+    assert synthetic.symmetry_error(result.points, left, twin[left]) < 0.05 * synthetic.symmetry_error(bent, left, twin[left])
 
 
-def test_the_correspondence_grows_past_where_one_plane_can_pair(blob):
-    """Slightly bent (as after a landmark solve), the blob's ends no longer mirror across the plane
-    within the acceptance distance; local mirror maps pair them, correctly."""
-    points, faces = blob
-    correspondence = mirror_correspondence(synthetic.bend(points, 0.05, along=1), faces, [1.0, 0.0, 0.0], 0.0)
-    assert correspondence.seeds < 0.8 * len(points) and correspondence.waves > 0  # measured 78 %
-    np.testing.assert_array_equal(correspondence.partner, twins(points))
+def test_a_flat_shape_is_symmetrized_in_its_plane():
+    """A flat, nearly mirror-symmetric outline (z = 0) in every mode: the output stays exactly flat and its
+    outline's asymmetry drops."""
+    angle = np.linspace(0, 2 * np.pi, 120, endpoint=False)
+    radius = 1.0 + 0.3 * np.cos(2 * angle) + 0.15 * np.cos(3 * angle)  # even in x -> -x (angle -> pi - angle)
+    outline = np.column_stack([radius * np.sin(angle), radius * np.cos(angle)])
+    outline[:, 0] += 0.04 * np.sin(5 * angle) ** 2 * (outline[:, 0] > 0)  # the right side a little off
+    rings = [outline * scale for scale in (1.0, 0.75, 0.5, 0.25)]
+    points2d = np.vstack(rings + [[[0.0, 0.0]]])
+    from scipy.spatial import Delaunay
+    faces = Delaunay(points2d).simplices
+    points = np.column_stack([points2d, np.zeros(len(points2d))])
+    from scipy.spatial import cKDTree
+
+    def outline_asymmetry(outline, normal, offset):
+        """Largest distance from an outline point's mirror image to the outline (its points, dense)."""
+        reflected = outline - 2.0 * (outline @ normal - offset)[:, None] * normal
+        return cKDTree(outline).query(reflected)[0].max()
+
+    before = outline_asymmetry(points[:120], np.array([1.0, 0.0, 0.0]), 0.0)
+    for mode in ("standard", "affine", "articulated"):
+        result = symmetrize(points, faces=faces, pairs="auto", mode=mode)
+        assert (result.points[:, 2] == 0.0).all()
+        plane_normal = np.asarray(result.report["plane_normal"])
+        assert abs(plane_normal[2]) < 1e-12  # the mirror line lies in the plane
+        after = outline_asymmetry(result.points[:120], plane_normal, result.report["plane_offset"])
+        print(mode, "outline asymmetry before / after:", before, after)
+        assert after < 0.5 * before
 
 
-def test_mild_asymmetry_is_more_than_halved_without_landmarks(cow):
+def test_a_point_cloud_without_faces_is_paired_by_its_points(blob):
+    points, _ = blob
+    posed = synthetic.random_rigid(points, 5)
+    result = symmetrize(posed, pairs="auto")
+    assert np.abs(result.points - posed).max() < 1e-6 * np.linalg.norm(np.ptp(points, axis=0))
+    assert result.report["auto_pairs"]["twins_are"] == "exact vertices"
+
+
+def test_a_shape_without_mirror_symmetry_is_refused_saying_how_much_mirrors():
+    """pymeshlab's bunny: half of its surface lies within half a percent of its mirror image, the rest (ears,
+    head) far from it."""
     ms = pymeshlab.MeshSet()
-    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=synthetic.random_rigid(synthetic.bend(cow.points, 0.2), 6),
-                               face_matrix=cow.faces))
-    report = ms.generate_symmetrized_mesh(pairs="auto")
-    assert report["pair_count"] == 0 and "landmark_asymmetry_before" not in report
-    # the input's asymmetry is measured across the surface plane the pairing started from, as fitted afresh
-    independent = mirror_asymmetry(ms.mesh(report["input_mesh_id"]).vertex_matrix(), cow.faces)
-    assert report["mirror_asymmetry_before"]["plane_normal"] == report["auto_pairs"]["surface_plane"]["normal"]
-    assert report["mirror_asymmetry_before"]["rms"] == pytest.approx(independent["rms"], rel=1e-12)
-    assert report["mirror_asymmetry_after"]["rms"] < report["mirror_asymmetry_before"]["rms"] / 2
-    assert report["hausdorff_input_output"]["max"] > 0
-    assert ms.current_mesh().vertex_number() == len(cow.points)
+    ms.load_new_mesh(str(SAMPLE_MESHES / "bunny.obj"))
+    ms.meshing_decimation_quadric_edge_collapse(targetfacenum=10000)
+    mesh = ms.current_mesh()
+    with pytest.raises(SymmetryNotFoundError, match=r"No mirror symmetry found: the best mirror map \(.+\) mirrors "
+                       r"\d+% of the surface within 0\.5% of its size \(mirror plane \d+%.*needs 50%\. Place "
+                       r"landmark pairs and use pairs='landmarks'") as raised:
+        symmetrize(mesh.vertex_matrix(), faces=mesh.face_matrix(), pairs="auto")
+    assert isinstance(raised.value, GeometryError)  # a SymblendError, a ValueError
+
+
+def _corpus():
+    """Every mesh of ../shared/data and pymeshlab's samples, the large ones simplified to 8,000 faces."""
+    paths = sorted(SHARED_DATA.glob("*.obj")) + sorted(SHARED_DATA.glob("*.ply"))
+    paths += [SAMPLE_MESHES / name for name in ("cow.obj", "bone.ply", "bunny.obj", "airplane.obj", "cube.obj")]
+    for path in paths:
+        ms = pymeshlab.MeshSet()
+        ms.load_new_mesh(str(path))
+        if ms.current_mesh().face_number() > 16000:
+            ms.meshing_decimation_quadric_edge_collapse(targetfacenum=8000)
+        yield path.name, ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+
+
+def test_every_corpus_mesh_gives_a_finite_output_or_a_clear_refusal():
+    outcomes = {}
+    for name, points, faces in _corpus():
+        try:
+            result = symmetrize(points, faces=faces, pairs="auto")
+        except SymblendError as error:
+            outcomes[name] = f"refused: {error}"
+            continue
+        assert np.isfinite(result.points).all(), name
+        assert result.points.shape == points.shape
+        outcomes[name] = "ok"
+    print(outcomes)
+    assert len(outcomes) >= 5  # pymeshlab's samples at least
+
+
+def test_a_singular_system_is_an_error_not_a_non_finite_output(blob, monkeypatch):
+    """Whatever goes wrong inside the solve (here the global solve is made to return NaN), the caller gets
+    a GeometryError, for landmarks and automatic pairs alike, never NaN coordinates."""
+    from importlib import import_module
+    core = import_module("filter_symblend.symmetrize")  # the module (the package's `symmetrize` is the function)
+    points, faces = blob
+    original = core.global_solve
+
+    def broken(*args, **kwargs):
+        r, s = original(*args, **kwargs)
+        r[3] = np.nan
+        return r, s
+
+    monkeypatch.setattr(core, "global_solve", broken)
+    left = np.flatnonzero(points[:, 0] > 0.1)[::10]
+    with pytest.raises(GeometryError, match=r"The solve gave non-finite coordinates"):
+        symmetrize(points, left, twins(points)[left])
+    with pytest.raises(GeometryError, match=r"The solve gave non-finite coordinates"):
+        symmetrize(synthetic.bend(points, 0.2), faces=faces, pairs="auto")
+
+
+def test_the_config_documents_every_field():
+    table = AutoConfig.describe()
+    import dataclasses
+    for field in dataclasses.fields(AutoConfig):
+        assert f"`{field.name}`" in table and field.metadata["unit"] and len(field.metadata["reason"]) > 40
 
 
 @pytest.mark.parametrize("deformation", ["bend", "figure 1"])
-def test_landmarks_plus_auto_makes_every_vertex_pair_more_symmetric(cow, deformation):
+def test_landmarks_plus_auto_makes_every_vertex_pair_more_symmetric(cow, cow_100_landmarks, deformation):
     deform = {"bend": lambda p: synthetic.bend(p, 1.2), "figure 1": synthetic.figure_1_deformation}[deformation]
     deformed = synthetic.random_rigid(deform(cow.points), seed=3)
-    left, right = cow.landmarks(100)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", SymblendWarning)
-        alone = symmetrize(deformed, left, right, mode="affine")
-        dense = symmetrize(deformed, left, right, faces=cow.faces, pairs="landmarks+auto", mode="affine")
+    left, right = cow_100_landmarks
+    alone = _quiet_symmetrize(deformed, left, right, mode="affine")
+    dense = _quiet_symmetrize(deformed, left, right, faces=cow.faces, pairs="landmarks+auto", mode="affine")
     error_alone = synthetic.symmetry_error(alone.points, cow.all_left, cow.all_right)
     error_dense = synthetic.symmetry_error(dense.points, cow.all_left, cow.all_right)
-    assert error_dense < error_alone / 2  # measured 4.3x (bend) and 2.5x (figure 1)
+    print(deformation, "landmarks alone / with automatic pairs:", error_alone, error_dense)
+    assert error_dense < error_alone / 2
     assert synthetic.shape_error(dense.points, cow.points) <= synthetic.shape_error(alone.points, cow.points)
-    # the user's landmarks stay exact mirror images
-    assert dense.report["landmark_asymmetry_after"]["max_relative"] < 1e-9
+    assert dense.report["landmark_asymmetry_after"]["max_relative"] < 1e-9  # the user's landmarks stay exact
     assert dense.report["pair_count"] == 100 and dense.report["auto_pairs"]["pair_count"] > 500
 
 
-@pytest.mark.parametrize("deformation", ["bend 0.4 rad", "bend 0.4 rad + compression 0.85"])
-def test_fifty_landmarks_plus_auto_beat_a_hundred_landmarks_five_times(cow, deformation):
-    """The README's advice for a moderately deformed specimen: half the landmarks, plus automatic pairs,
-    give every vertex pair a fifth of the asymmetry that twice as many landmarks leave alone."""
-    bent = synthetic.bend(cow.points, 0.4)
-    deformed = bent if deformation == "bend 0.4 rad" else synthetic.compress(bent, [1, 1, 0], 0.85, shear=0.05)
-    deformed = synthetic.random_rigid(deformed, seed=7)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", SymblendWarning)
-        hundred = symmetrize(deformed, *cow.landmarks(100), mode="affine")
-        fifty = symmetrize(deformed, *cow.landmarks(50), faces=cow.faces, pairs="landmarks+auto", mode="affine")
-    errors = [synthetic.symmetry_error(out.points, cow.all_left, cow.all_right) for out in (hundred, fifty)]
-    print(deformation, "symmetry error, 100 landmarks / 50 landmarks + auto:", errors)
-    assert errors[1] < errors[0] / 5  # measured 18x for both
-    assert synthetic.shape_error(fifty.points, cow.points) <= synthetic.shape_error(hundred.points, cow.points)
-
-
 def _cow_with_a_subtle_dent(cow, depth=0.1):
-    """The exactly symmetric cow with a patch of its left flank pushed out along the normals by
-    ``depth`` mean edge lengths: shallow enough for automatic pairs to accept. (points, patch mask,
-    mirror twins of the patch, mean edge length)."""
+    """The exactly symmetric cow with a patch of its left flank pushed out along the normals by ``depth``
+    mean edge lengths. (points, patch mask, mirror twins of the patch, mean edge length)."""
     spacing = mean_spacing(cow.points, cow.faces)
     normals, _ = vertex_normals(cow.points, cow.faces)
     centre = cow.points[np.argmax(cow.points[:, 0])]
     patch = np.linalg.norm(cow.points - centre, axis=1) < 0.07 * cow.diagonal
     dented = cow.points.copy()
     dented[patch] += depth * spacing * normals[patch]
-    twins = cow.partner[patch]
-    return dented, patch, twins[twins >= 0], spacing
+    twin = cow.partner[patch]
+    return dented, patch, twin[twin >= 0], spacing
 
 
 def test_excluded_vertices_do_not_pull_the_sound_side_toward_them(cow):
-    dented, patch, twins, spacing = _cow_with_a_subtle_dent(cow)
+    dented, patch, twin, spacing = _cow_with_a_subtle_dent(cow)
     paired = symmetrize(dented, faces=cow.faces, pairs="auto", mode="affine")
     excluded = symmetrize(dented, faces=cow.faces, pairs="auto", mode="affine", auto_excluded=patch)
-    moved = [np.linalg.norm(out.points[twins] - cow.points[twins], axis=1).max() / spacing
-             for out in (paired, excluded)]
-    assert moved[0] > 0.04  # measured 0.055: the sound twins meet the dent halfway
-    assert moved[1] < 1e-3  # measured 1e-4: they follow the warp of the pairs around
+    moved = [np.linalg.norm(out.points[twin] - cow.points[twin], axis=1).max() / spacing for out in (paired, excluded)]
+    print("sound twins moved (edges), paired / excluded:", moved)
+    assert moved[1] < moved[0] / 10
     assert excluded.report["auto_pairs"]["excluded_vertices"] == np.count_nonzero(patch)
     same = symmetrize(dented, faces=cow.faces, pairs="auto", mode="affine", auto_excluded=np.flatnonzero(patch))
     np.testing.assert_array_equal(same.points, excluded.points)  # a mask or indices
 
 
 def test_a_missing_region_is_left_out_of_the_automatic_pairs_and_filled_from_the_sound_side(cow):
-    """With landmarks+auto as with landmarks alone, the dent (marked missing) takes the mirror shape of
-    the sound side, which does not move."""
-    dented, patch, twins, spacing = _cow_with_a_subtle_dent(cow)
+    dented, patch, twin, spacing = _cow_with_a_subtle_dent(cow)
     left, right = cow.landmarks(150)
     sound = ~patch[left] & ~patch[right]
     off_surface = {}
@@ -168,15 +306,13 @@ def test_a_missing_region_is_left_out_of_the_automatic_pairs_and_filled_from_the
         ms = meshset_with_pairs(dented, cow.faces, left[sound], right[sound])
         ms.current_mesh().add_vertex_custom_scalar_attribute(np.where(patch, 0.0, 1.0), "symblend_weight")
         report = ms.generate_symmetrized_mesh(missing_region="weight", pairs=pairs, mode="affine")
-        stored, output = ms.mesh(0).vertex_matrix(), ms.current_mesh().vertex_matrix()  # as pymeshlab holds them
-        assert np.linalg.norm(output[twins] - stored[twins], axis=1).max() < 1e-3 * spacing  # measured 3e-5
+        stored, output = ms.mesh(0).vertex_matrix(), ms.current_mesh().vertex_matrix()
+        assert np.linalg.norm(output[twin] - stored[twin], axis=1).max() < 1e-2 * spacing
         on_surface = closest_points_on_surface(cow.points, cow.faces, output[patch])
         off_surface[pairs] = np.linalg.norm(on_surface - output[patch], axis=1) / spacing
     assert report["auto_pairs"]["excluded_vertices"] == np.count_nonzero(patch)
-    # measured: 0.1 edge lengths -> mean 0.016, max 0.066 (the fill fades in over two edges), as with landmarks
-    # alone; before the missing region was left out of the automatic pairs: mean 0.051, sound twins moved 0.05
-    assert off_surface["landmarks+auto"].mean() < 0.03
-    assert off_surface["landmarks+auto"].max() <= off_surface["landmarks"].max() + 1e-3
+    assert off_surface["landmarks+auto"].mean() <= off_surface["landmarks"].mean() + 0.01
+    assert off_surface["landmarks+auto"].max() <= off_surface["landmarks"].max() + 0.01
 
 
 @pytest.mark.parametrize(("excluded", "pairs", "message"), [
@@ -192,10 +328,20 @@ def test_bad_exclusions_are_refused_naming_the_fix(cow, excluded, pairs, message
         symmetrize(cow.points, left, right, faces=cow.faces, pairs=pairs, auto_excluded=excluded)
 
 
+@pytest.mark.parametrize(("faces", "message"), [
+    (np.array([[0, 1, 2.5]]), r"`faces` must be an \(F, 3\) array of vertex indices, got shape \(1, 3\) of float64"),
+    (np.array([[0, 1, 99]]), r"`faces` row 0 refers to vertex 99, but there are 10 vertices \(0\.\.9\)\."),
+])
+def test_bad_faces_are_refused_naming_the_row(faces, message):
+    with pytest.raises(ParameterError, match=message):
+        symmetrize(np.random.default_rng(0).normal(size=(10, 3)), faces=faces, pairs="auto")
+
+
 def test_progress_covers_every_round(blob):
     points, faces = blob
     seen = []
-    symmetrize(points, faces=faces, pairs="auto", progress=lambda percent, message: seen.append((percent, message)))
+    symmetrize(synthetic.bend(points, 0.3), faces=faces, pairs="auto",
+               progress=lambda percent, message: seen.append((percent, message)))
     percents = [percent for percent, _ in seen]
     assert percents == sorted(percents) and percents[-1] == 100.0
     assert any("round 2" in message for _, message in seen)
@@ -211,15 +357,9 @@ def test_landmark_modes_need_landmarks():
         symmetrize(np.eye(3), pairs="landmarks+auto")
 
 
-def test_a_shape_without_mirror_symmetry_is_refused_with_advice():
-    points = np.random.default_rng(0).normal(size=(300, 3)) * [3.0, 2.0, 1.0]
-    with pytest.raises(GeometryError, match=r"Automatic pairing found no usable mirror pairs \(mirror plane: "
-                       r"rejected: it pairs \d+% of the vertices, fewer than 20%;.*landmarks\+auto") as raised:
-        symmetrize(points, pairs="auto")
-    message = str(raised.value)
-    assert message.count("landmarks+auto") == 1  # the advice once, not once per candidate
-    assert re.search(r"whitened mirror plane: rejected: its pairs are not locally mirror-symmetric "
-                     r"\(median local fit residual 0\.\d\d > 0\.15\)", message)
+def test_too_few_pairable_vertices_are_refused():
+    with pytest.raises(GeometryError, match=r"The mesh has 3 vertices that can be paired"):
+        symmetrize(np.eye(3), pairs="auto")
 
 
 @pytest.mark.parametrize(("value", "message"), [
@@ -235,35 +375,23 @@ def test_integer_parameters_are_checked(value, message):
 
 def test_auto_on_a_meshset_ignores_the_landmark_attributes(cow):
     left, right = cow.landmarks(30)
-    from conftest import meshset_with_pairs
     ms = meshset_with_pairs(synthetic.random_rigid(cow.points, 2), cow.faces, left, right)
     ms.current_mesh().add_vertex_custom_scalar_attribute(np.full(len(cow.points), 0.5), "symblend_midline")
     report = ms.generate_symmetrized_mesh(pairs="auto")  # a bad midline attribute is not even read
-    assert report["pair_count"] == 0 and report["auto_pairs"]["converged"]
+    assert report["pair_count"] == 0 and report["auto_pairs"]["stopped"] == "converged"
 
 
-def test_igea_scan_mirror_asymmetry_is_at_least_halved():
+def test_the_igea_scan_is_made_symmetric_without_moving_more_than_its_asymmetry():
     path = SHARED_DATA / "igea.ply"
     if not path.exists():
         pytest.skip(f"{path} is absent (shared test data not available)")
     ms = pymeshlab.MeshSet()
     ms.load_new_mesh(str(path))
     ms.meshing_decimation_quadric_edge_collapse(targetfacenum=40000)
-    report = ms.generate_symmetrized_mesh(pairs="auto")
-    assert report["mirror_asymmetry_after"]["rms"] < report["mirror_asymmetry_before"]["rms"] / 2
-    assert report["hausdorff_input_output"]["max"] > 0
-    assert report["auto_pairs"]["exact_twins"] is False  # its sides are tessellated differently: not completed
-    rounds = report["auto_pairs"]["rounds"]  # twins hop between neighbours (changed) but barely move
-    assert rounds[-1]["moved_twins"] < 0.01 < 0.1 < rounds[-1]["changed_vertices"]
-
-
-def test_twins_that_hop_to_a_neighbour_or_lose_their_pair_do_not_count_as_moved():
-    from importlib import import_module
-    moved_twins = import_module("filter_symblend.symmetrize")._moved_twins
-    points = np.column_stack([np.arange(10.0), np.zeros(10), np.zeros(10)])  # a row, edges 1 apart
-    previous = np.array([9, 8, 7, 6, 5, 4, 3, 2, 1, 0])
-    hop = np.array([8, 8, 7, 6, 5, 4, 3, 2, 1, 0])  # vertex 0's twin moves one edge
-    lost = np.array([-1, -1, 7, 6, 5, 4, 3, 2, 1, 0])  # vertices 0 and 1 fail the acceptance test
-    jump = np.array([5, 8, 7, 6, 5, 4, 3, 2, 1, 0])  # vertex 0's twin moves four edges
-    assert moved_twins(points, hop, previous, 1.0) == moved_twins(points, lost, previous, 1.0) == 0.0
-    assert moved_twins(points, jump, previous, 1.0) == 0.1
+    points, faces = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+    result = symmetrize(points, faces=faces, pairs="auto")
+    before, after = mirror_asymmetry(points, faces), mirror_asymmetry(result.points, faces)
+    p90 = [np.quantile(m["per_vertex"], 0.9) for m in (before, after)]
+    print("90th percentile mirror distance before / after:", p90)
+    assert p90[1] < 0.25 * p90[0]
+    assert np.abs(result.points - points).max() < before["max"]

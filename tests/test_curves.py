@@ -14,7 +14,7 @@ from filter_symblend.neighbourhoods import mean_nearest_spacing
 from filter_symblend.pairing import snap_pairs
 from filter_symblend.semilandmarks import arc_lengths, edge_graph, equal_arc_samples, resample_curve, surface_path
 
-from test_auto_pairs import symmetric_blob, twins
+from conftest import symmetric_blob, twins
 
 
 def test_numbered_names_group_into_curves_in_number_order():

@@ -1,0 +1,157 @@
+"""Vertex twins grown from sure ones by local mirror maps, and the ones their neighbours contradict dropped.
+
+On a mesh whose vertices mirror each other, a global map (a plane, a registration)
+gives exact twins only where it is accurate. Around any set of exact pairs, though,
+the mirror map is locally an affine map, fitted to the nearest pairs: it predicts
+the twin of an unpaired vertex nearby, and the twin is taken when it passes the same
+tests as a global map's (unambiguous nearest vertex, mutual, facing the mirrored way).
+Wave after wave the pairs spread over the surface, following a bend or a twist as
+far as the surface carries it.
+
+Then each pair is checked against the local map of its other neighbours, on the
+input's geometry (a symmetrized output is exactly symmetric at the pairs it was made
+from, and would vouch for any of them): its twin must be where that map puts it,
+nearly as precisely as the neighbouring pairs fit their own maps (``local_precision``
+times their median misfit). On an exactly symmetric mesh this admits only exact twins
+(a vertex with no exact twin lands between vertices, far beyond a precision of rounding
+errors); on a bent one, the precision follows the local curvature. A pair that fails is
+dropped (one wrong pair, made exactly symmetric by the solve, distorts its whole
+neighbourhood) and its vertices are not grown again.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..geometry import MIRROR_X, proper_rotation_fit
+from .config import AutoConfig
+from .surface import Surface
+
+FRONTIER = 3.0  # x the median vertex spacing: unpaired vertices this close to a pair are tried in a wave
+RIDGE = 0.05  # pull of each local affine map toward its best improper rigid map, x the neighbourhood spread
+MAX_PASSES = 4  # prune-and-grow passes at most (each removes what the one before grew wrong)
+
+
+def local_maps(points: np.ndarray, partner: np.ndarray, queries: np.ndarray, paired: np.ndarray,
+               tree: cKDTree, count: int, leave_out: bool = False):
+    """Predicted twins (m, 3) of the positions ``queries`` (m, 3) and the improper rigid part (m, 3, 3) of
+    their local maps: affine maps fitted to the ``count`` nearest paired vertices ``paired`` (``tree`` holds
+    their positions ``points[paired]``, ``partner`` their twins), regularized toward the best improper
+    rigid map; ``leave_out``: the queries are the paired vertices' own positions, and each map is fitted
+    without the query's own pair."""
+    k = min(count + int(leave_out), len(paired))
+    _, nearest = tree.query(queries, k=k)
+    neighbours = paired[nearest.reshape(len(queries), k)[:, int(leave_out):]]
+    x, y = points[neighbours], points[partner[neighbours]]
+    cx, cy = x.mean(axis=1), y.mean(axis=1)
+    x, y = x - cx[:, None], y - cy[:, None]
+    cross = np.einsum("nki,nkj->nij", y, x)
+    spread = np.einsum("nki,nkj->nij", x, x)
+    rigid = proper_rotation_fit(cross @ MIRROR_X) @ MIRROR_X  # best y ~ R J x, R proper
+    ridge = RIDGE * np.trace(spread, axis1=1, axis2=2)[:, None, None] / 3.0 + 1e-300
+    linear = (cross + ridge * rigid) @ np.linalg.inv(spread + ridge * np.eye(3))
+    return np.einsum("nij,nj->ni", linear, queries - cx) + cy, rigid
+
+
+def _accepted(surface: Surface, sources, predicted, rigid, back, config):
+    """(m,) bool and the twin vertices (m,): predictions whose nearest vertex is unambiguous, facing the
+    mirrored way, and predicts the source back."""
+    vertex, _, ratio = surface.nearest_vertices(predicted)
+    ok = ratio <= config.ratio
+    if surface.is_mesh:
+        ok &= np.einsum("nij,nj,ni->n", rigid, surface.normals[sources], surface.normals[vertex]) > 0
+    ok &= back(vertex) == sources
+    return ok, vertex
+
+
+def grow(surface: Surface, partner: np.ndarray, eligible: np.ndarray, twins: np.ndarray, config: AutoConfig) -> int:
+    """Pair ``eligible`` (N,) bool vertices, with ``twins`` (N,) bool vertices, wave by wave from the pairs in
+    ``partner`` (N,) (twin index, itself on the midline, -1 unpaired; updated in place). Returns the number
+    of waves."""
+    points = surface.points
+    waves = 0
+    while True:
+        paired = np.flatnonzero(partner >= 0)
+        if len(paired) < 4:
+            return waves
+        tree = cKDTree(points[paired])
+        unpaired = np.flatnonzero(eligible & (partner < 0))
+        gap, _ = tree.query(points[unpaired], distance_upper_bound=FRONTIER * surface.spacing)
+        sources = unpaired[np.isfinite(gap)]
+        if not len(sources):
+            return waves
+        predicted, rigid = local_maps(points, partner, points[sources], paired, tree, config.local_neighbours)
+
+        def back(vertices):
+            return surface.nearest_vertices(local_maps(points, partner, points[vertices], paired, tree,
+                                                       config.local_neighbours)[0])[0]
+
+        ok, vertex = _accepted(surface, sources, predicted, rigid, back, config)
+        ok &= (partner[vertex] < 0) & twins[vertex]
+        sources, vertex = _one_pair_per_vertex(sources[ok], vertex[ok])
+        if not len(sources):
+            return waves
+        partner[sources], partner[vertex] = vertex, sources
+        waves += 1
+
+
+def _one_pair_per_vertex(sources: np.ndarray, twins: np.ndarray):
+    """The pairs with each vertex in one pair only (a pair found from both ends counts once)."""
+    low, high = np.minimum(sources, twins), np.maximum(sources, twins)
+    _, first = np.unique(np.column_stack([low, high]), axis=0, return_index=True)
+    sources, twins = sources[first], twins[first]
+    ends, uses = np.unique(np.concatenate([sources, twins[twins != sources]]), return_counts=True)
+    single = (uses[np.searchsorted(ends, sources)] == 1) & (uses[np.searchsorted(ends, twins)] == 1)
+    return sources[single], twins[single]
+
+
+def prune(surface: Surface, partner: np.ndarray, fixed: np.ndarray, config: AutoConfig, floor: float) -> np.ndarray:
+    """Unpair (in place) the pairs whose twin is not where the local map of their other neighbouring pairs
+    puts it (see the module doc), except ``fixed`` (N,) bool vertices. Returns the vertices dropped (N,)
+    bool. ``floor`` (mesh units): the least precision asked (rounding)."""
+    wrong = np.zeros(len(partner), dtype=bool)
+    
+    paired = np.flatnonzero(partner >= 0)
+    if len(paired) <= config.local_neighbours:
+        return wrong
+    tree = cKDTree(surface.points[paired])
+    predicted, rigid = local_maps(surface.points, partner, surface.points[paired], paired, tree,
+                                  config.local_neighbours, leave_out=True)
+    misfit = np.linalg.norm(predicted - surface.points[partner[paired]], axis=1)
+    # The neighbouring pairs' own misfits, midline points left out: a row of vertices just off the
+    # midline, each wrongly its own twin, would vouch for one another.
+    crossing = np.flatnonzero(partner[paired] != paired)
+    if len(crossing) <= config.local_neighbours:
+        return wrong
+    _, nearest = cKDTree(surface.points[paired[crossing]]).query(surface.points[paired], k=config.local_neighbours + 1)
+    neighbours = np.where((crossing[nearest[:, :1]] == np.arange(len(paired))[:, None]), nearest[:, 1:], nearest[:, :-1])
+    local = np.median(misfit[crossing[neighbours]], axis=1)
+    precise = misfit <= np.maximum(config.local_precision * local, floor)
+    vertex, _, ratio = surface.nearest_vertices(predicted)
+    agrees = precise & (vertex == partner[paired]) & (ratio <= config.ratio)
+    if surface.is_mesh:
+        agrees &= np.einsum("nij,nj,ni->n", rigid, surface.normals[paired], surface.normals[partner[paired]]) > 0
+    wrong[paired[~agrees]] = True
+    wrong |= wrong[np.maximum(partner, 0)] & (partner >= 0)
+    wrong &= ~fixed
+    partner[wrong] = -1
+    return wrong
+
+
+def grow_and_prune(space: Surface, geometry: Surface, partner: np.ndarray, eligible: np.ndarray,
+                   twins: np.ndarray, fixed: np.ndarray, config: AutoConfig, floor: float) -> dict:
+    """:func:`prune` the seeds in ``partner`` on ``geometry`` (the input), :func:`grow` in ``space`` (where
+    the map predicts: the input, or a symmetrized output; ``eligible`` (N,) bool vertices, with ``twins``
+    (N,) bool ones), prune again, and grow again without what was dropped, until nothing changes (at most
+    MAX_PASSES)."""
+    dropped = np.zeros(len(partner), dtype=bool)
+    waves = 0
+    for _ in range(MAX_PASSES):
+        removed = prune(geometry, partner, fixed, config, floor)
+        dropped |= removed
+        grown = grow(space, partner, eligible & ~dropped, twins & ~dropped, config)
+        waves += grown
+        if not removed.any() and not grown:
+            break
+    return {"growth_waves": waves, "dropped": int(np.count_nonzero(dropped))}

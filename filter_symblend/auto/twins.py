@@ -1,0 +1,69 @@
+"""Twins of vertices under a mirror map: where on the surface, and whether a vertex.
+
+For each source vertex the map predicts where its twin lies. The twin is the point of
+the surface nearest that prediction (how far the prediction is from the surface is its
+*landing* distance), and, if the nearest vertex is unambiguous (ratio test) and the map
+sends that vertex back to the source (mutual), that vertex. A twin counts only if the
+map is consistent there: the twin point's own prediction comes back within the local
+vertex spacing of the source, and the two face the mirrored way (on a thin sheet the
+other face is near, but faces away).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from .config import AutoConfig
+from .maps import MirrorMap
+
+
+@dataclasses.dataclass(frozen=True)
+class Twins:
+    """Per source vertex (m,), in the map's space: ``point`` (m, 3) the twin point on the surface,
+    ``landing`` its distance to the prediction; ``corners`` (m, 3) vertices and ``weights`` (m, 3)
+    barycentric weights of the twin point (the same point on any embedding of the mesh);
+    ``vertex`` (m,) the nearest vertex to the prediction, ``vertex_distance``, ``ratio`` (nearest /
+    second-nearest), ``mutual`` whether the map sends that vertex back to the source; ``sound`` whether
+    the map is consistent there; ``side`` +1 for a source on the left (along the map's normal), -1 right."""
+
+    sources: np.ndarray
+    point: np.ndarray
+    landing: np.ndarray
+    corners: np.ndarray
+    weights: np.ndarray
+    vertex: np.ndarray
+    vertex_distance: np.ndarray
+    ratio: np.ndarray
+    mutual: np.ndarray
+    sound: np.ndarray
+    side: np.ndarray
+
+    def covered(self, tolerance: float) -> np.ndarray:
+        """(m,) bool: sources with a sound twin landing within ``tolerance`` (mesh units)."""
+        return self.sound & (self.landing <= tolerance)
+
+    def exact_vertex(self, config: AutoConfig, tolerance: float) -> np.ndarray:
+        """(m,) bool: sources whose twin is a vertex: the nearest vertex to the prediction, within
+        ``tolerance`` of it (mesh units: the map's precision), unambiguous and mutual (a source can be its
+        own twin, on the midline)."""
+        return self.sound & self.mutual & (self.ratio <= config.ratio) & (self.vertex_distance <= tolerance)
+
+
+def find_twins(mirror: MirrorMap, sources: np.ndarray) -> Twins:
+    """The twins of ``sources`` (m,) (vertex indices) under ``mirror``."""
+    surface = mirror.surface
+    positions = surface.points[sources]
+    predicted = mirror.predict(positions)
+    point, landing, twin_normal, corners, weights = surface.nearest_points(predicted)
+    back, _, _ = surface.nearest_vertices(mirror.predict(point))  # (a vertex: the round trip's own error is small)
+    round_trip = np.linalg.norm(surface.points[back] - positions, axis=1)
+    sound = np.isfinite(predicted).all(axis=1) & (round_trip <= surface.local_spacing[sources])
+    if surface.is_mesh:
+        sound &= np.einsum("ni,ni->n", mirror.mirror_normals(surface.normals[sources]), twin_normal) > 0
+    vertex, vertex_distance, ratio = surface.nearest_vertices(predicted)
+    returning, _, _ = surface.nearest_vertices(mirror.predict(surface.points[vertex]))
+    side = np.where((positions - point) @ mirror.normal >= 0, 1, -1).astype(np.int8)
+    return Twins(sources, point, landing, corners, weights, vertex, vertex_distance, ratio, returning == sources,
+                 sound, side)
