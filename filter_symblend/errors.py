@@ -33,6 +33,15 @@ class GeometryError(SymblendError):
     """The coordinates or the landmark layout make the problem degenerate."""
 
 
+class DegenerateNeighbourhoodError(GeometryError):
+    """The landmarks around some pairs lie (nearly) on a plane or a line, so the local transform the mode
+    estimates is undetermined there; ``pair_ids`` are those pairs."""
+
+    def __init__(self, message: str, pair_ids: Sequence):
+        super().__init__(message)
+        self.pair_ids = list(pair_ids)
+
+
 class SymmetryNotFoundError(GeometryError):
     """Automatic pairs found no mirror symmetry to restore (the shape is not mirror-symmetric)."""
 

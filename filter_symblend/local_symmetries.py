@@ -18,7 +18,7 @@ import dataclasses
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import GeometryError, id_list
+from .errors import DegenerateNeighbourhoodError, id_list
 from .geometry import normalize, proper_rotation_fit, rotation_about_axis
 
 DEGENERATE_RATIO = 1e-8  # smallest/largest spread of a neighbourhood below which it has no 3D frame
@@ -135,10 +135,11 @@ def _fit_quality(moments, left, right, left_centre, right_centre, normals, m_lef
 
 
 def _degenerate(pair_ids: np.ndarray, mask: np.ndarray, layout: str, estimate: str, fix: str):
-    return GeometryError(
+    return DegenerateNeighbourhoodError(
         f"The landmarks around pair(s) {id_list(pair_ids[mask])} are (nearly) {layout}, so the "
         f"{estimate} cannot be estimated there. {fix} A pair far from its neighbours' partners "
-        "is cut off from them and causes this too: check that it joins the right two vertices."
+        "is cut off from them and causes this too: check that it joins the right two vertices.",
+        pair_ids[mask],
     )
 
 

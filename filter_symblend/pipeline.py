@@ -6,7 +6,7 @@ import inspect
 
 import numpy as np
 
-from .auto import symmetrize_automatic
+from .auto import DEFAULT, symmetrize_automatic
 from .errors import LandmarkError, ParameterError
 from .landmarks import check_points
 from .parameters import ARRAYS, CORE, keyword_signature, parameters_doc, validate_parameters
@@ -54,7 +54,8 @@ def _faces(faces, count: int) -> np.ndarray:
 
 
 def symmetrize(points, left=None, right=None, pair_ids=None, midline=None, left_weights=None,
-               right_weights=None, progress=None, faces=None, auto_excluded=None, **params) -> SymmetrizationResult:
+               right_weights=None, progress=None, faces=None, auto_excluded=None, auto_config=None,
+               **params) -> SymmetrizationResult:
     if progress is not None:
         progress(0.0, "checking the input")
     options = validate_parameters(params, ARRAYS)
@@ -67,13 +68,13 @@ def symmetrize(points, left=None, right=None, pair_ids=None, midline=None, left_
         if given:
             raise LandmarkError("`pairs='auto'` finds its own pairs and ignores landmarks; to use "
                                 "yours as well, pass pairs='landmarks+auto'.")
-        return symmetrize_automatic(points, faces, options, None, excluded, progress)
+        return symmetrize_automatic(points, faces, options, None, excluded, progress, auto_config or DEFAULT)
     if left is None or right is None:
         raise LandmarkError(f"`pairs='{options['pairs']}'` needs landmark pairs: pass `left` and "
                             "`right` vertex indices, or use pairs='auto'.")
     landmarks = check_landmarks(points, left, right, pair_ids, midline, left_weights, right_weights)
     if options["pairs"] == "landmarks+auto":
-        return symmetrize_automatic(points, faces, options, landmarks, excluded, progress)
+        return symmetrize_automatic(points, faces, options, landmarks, excluded, progress, auto_config or DEFAULT)
     return solve(points, landmarks, core, progress)
 
 
@@ -82,7 +83,7 @@ symmetrize.__signature__ = keyword_signature(
       for name, default in (("points", inspect.Parameter.empty), ("left", None), ("right", None),
                             ("pair_ids", None), ("midline", None), ("left_weights", None),
                             ("right_weights", None), ("progress", None), ("faces", None),
-                            ("auto_excluded", None))),
+                            ("auto_excluded", None), ("auto_config", None))),
     layers=ARRAYS)
 symmetrize.__doc__ = f"""Symmetrize ``points`` (N, 3) from landmark pairs (left[k], right[k]), automatic pairs, or both.
 
@@ -116,6 +117,8 @@ auto_excluded : (N,) bool array or (k,) int array of vertex indices, optional
     Vertices no automatic pair may use, nor pair with (a missing or broken
     part, whose shape must not shape the other side); only with
     ``pairs='auto'`` or ``'landmarks+auto'``.
+auto_config : filter_symblend.auto.AutoConfig, optional
+    The automatic pairs' settings (default ``AutoConfig()``; see its fields).
 {parameters_doc(ARRAYS)}
 
 Returns
@@ -134,8 +137,7 @@ Examples
 >>> import numpy as np, filter_symblend
 >>> from filter_symblend import synthetic
 >>> points, faces = synthetic.icosphere(3)
->>> bumpy = points * (1 + 0.2 * points[:, [1]] ** 2 + 0.1 * points[:, [2]])
->>> result = filter_symblend.symmetrize(synthetic.bend(bumpy, 0.3), faces=faces, pairs="auto")
->>> result.report["auto_pairs"]["stopped"] in ("converged", "no gain", "round limit")
-True
+>>> result = filter_symblend.symmetrize(synthetic.bend(synthetic.bumpy(points), 0.3), faces=faces, pairs="auto")
+>>> result.report["auto_pairs"]["twins_are"]
+'exact vertices'
 """

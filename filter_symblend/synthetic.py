@@ -230,3 +230,21 @@ def with_seams(points: np.ndarray, faces: np.ndarray, selected: np.ndarray):
     faces = faces.copy()
     faces[selected] = copies[faces[selected]]
     return np.vstack([points, points[used]]), faces
+
+
+def flat_region(outline: np.ndarray, rings: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """A flat mesh (z = 0) filling the star-shaped (about the origin) closed ``outline`` (n, 2): the outline
+    and ``rings - 1`` copies shrunk toward the origin, joined by strips of triangles, and a fan at the
+    origin: (points (rings * n + 1, 3), faces); the first n points are the outline."""
+    n = len(outline)
+    scales = np.arange(rings, 0, -1) / rings
+    points2d = np.vstack([outline * scale for scale in scales] + [np.zeros((1, 2))])
+    i = np.arange(n)
+    faces = []
+    for ring in range(rings - 1):
+        a, b = ring * n + i, ring * n + (i + 1) % n
+        c, d = a + n, b + n
+        faces += [np.column_stack([a, b, d]), np.column_stack([a, d, c])]
+    inner = (rings - 1) * n
+    faces.append(np.column_stack([inner + i, inner + (i + 1) % n, np.full(n, rings * n)]))
+    return np.column_stack([points2d, np.zeros(len(points2d))]), np.vstack(faces)

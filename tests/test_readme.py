@@ -1,27 +1,56 @@
-"""The README's examples run, its commands match CI, its parameter table is the declaration's."""
+"""The README and the docs: their examples run, their links resolve, the commands match CI, the parameter
+table is the declaration's, and the README stays short."""
 
 import pathlib
 import re
+
+import pytest
 
 from filter_symblend.parameters import parameters_markdown
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text()
+DOCS = sorted((ROOT / "docs").glob("*.md"))
 
 
-def test_python_examples_run(tmp_path, monkeypatch):
+def _python_blocks(text: str) -> list[str]:
+    return re.findall(r"```python\n(.*?)```", text, flags=re.S)
+
+
+def test_the_readme_example_runs(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     namespace = {}
-    for block in re.findall(r"```python\n(.*?)```", README, flags=re.S):
+    for block in _python_blocks(README):
         exec(compile(block, "README.md", "exec"), namespace)
-    assert (tmp_path / "cow_symmetrized.ply").exists() and (tmp_path / "cow.pp").exists()
+    assert (tmp_path / "cow_symmetrized.ply").exists()
 
 
-def test_first_commands_are_the_demo_and_the_tests_and_ci_runs_the_second():
-    commands = re.findall(r"```\n(.*?)\n```", README.split("## ")[0], flags=re.S)
+@pytest.mark.parametrize("page", [page for page in DOCS if _python_blocks(page.read_text())], ids=lambda p: p.name)
+def test_the_examples_of_each_documentation_page_run_in_order(page, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    namespace = {}
+    for block in _python_blocks(page.read_text()):
+        exec(compile(block, str(page.relative_to(ROOT)), "exec"), namespace)
+
+
+def test_the_readme_gives_the_demo_and_the_test_commands_and_ci_runs_the_second():
+    commands = re.findall(r"```\n(python3 -m venv .*?)\n```", README, flags=re.S)
     assert len(commands) == 2
     assert commands[0].endswith("scripts/demo.py") and "pytest" in commands[1]
     assert commands[1] in (ROOT / ".ci" / "run").read_text().splitlines()
+
+
+def test_the_readme_says_what_the_package_is_before_any_command():
+    before_first_command = README.split("```")[0]
+    assert "symmetrizes 3D meshes" in before_first_command and "fossils" in before_first_command
+
+
+def test_the_readme_is_short_and_its_links_resolve():
+    assert len(README.splitlines()) <= 250
+    for text, source in [(README, ROOT / "README.md")] + [(page.read_text(), page) for page in DOCS]:
+        for target in re.findall(r"\]\(([^)#]+)(?:#[^)]*)?\)", text):
+            if not target.startswith("http"):
+                assert (source.parent / target).exists(), f"{source.name} links to {target}, which does not exist"
 
 
 def test_parameter_table_is_generated_from_the_declaration():

@@ -149,8 +149,11 @@ def test_collinear_and_coplanar_landmarks():
         symmetrize(line, np.arange(5), np.arange(5, 10))
     plane = np.array([[x, y, 0.0] for x in (1.0, 2.0) for y in (0.0, 1.0, 2.0)])
     plane = np.vstack([plane, plane * [-1, 1, 1]])
-    with pytest.raises(GeometryError, match=r"on one plane.*Add pairs off that plane"):
-        symmetrize(plane, np.arange(6), np.arange(6, 12))
+    off_the_plane = np.vstack([plane, [[0.0, 1.0, 3.0], [0.5, 0.0, -2.0]]])  # the mesh is not flat
+    with pytest.raises(GeometryError, match=r"All landmarks lie \(nearly\) on one plane, and the mesh does not; .*Add pairs off it"):
+        symmetrize(off_the_plane, np.arange(6), np.arange(6, 12))
+    result = symmetrize(plane, np.arange(6), np.arange(6, 12))  # a flat mesh: its landmarks are in its plane
+    assert (result.points[:, 2] == 0.0).all()
 
 
 def flat_patch_and_far_cluster():

@@ -18,13 +18,14 @@ class AutoConfig:
     """Settings of ``pairs='auto'`` and ``'landmarks+auto'``; ``AutoConfig.describe()`` lists them."""
 
     landing_tolerance: float = _field(
-        0.005, "x bounding-box diagonal",
-        "a vertex is mirrored by a map when its predicted twin lies this close to the surface: half a "
-        "percent of the object's size, the scale at which a shape reads as mirror-symmetric to the eye")
+        0.01, "x bounding-box diagonal",
+        "a vertex is mirrored by a map when its predicted twin lies this close to the surface (and the map "
+        "comes back): one percent of the object's size, the asymmetry of a scan of a symmetric object")
     min_coverage: float = _field(
-        0.5, "share of the surface",
-        "below this share of mirrored vertices there is no mirror symmetry to restore: a shape most of "
-        "whose surface has no mirror image is refused, not made into another shape")
+        0.75, "share of the surface",
+        "below this share of mirrored vertices there is no mirror symmetry to restore: a shape a quarter "
+        "of whose surface has no mirror image is refused, not made into another shape (a side cut away "
+        "by up to 40 % still passes)")
     plane_suffices: float = _field(
         0.95, "share of the surface",
         "when one plane already mirrors this much of the surface, no non-rigid map can mirror much more: "
@@ -50,7 +51,8 @@ class AutoConfig:
         1 / 3, "share of the twins found",
         "the mesh's vertices are taken to mirror each other when a third of the twins found are exact vertices "
         "at once (unambiguous, mutual, as precise as the map); where the two sides are sampled independently "
-        "(a scan) only chance twins pass, about one in five at the most")
+        "(a scan) only chance twins pass, about one in five at the most (on an outline the ratio test is first put "
+        "on a surface's odds)")
     samples: int = _field(
         10_000, "vertices",
         "at most this many vertices, spread over the surface, are paired in each round: enough to choose "

@@ -41,6 +41,16 @@ def _neighbours(adjacency: sparse.csr_matrix, vertices: np.ndarray) -> tuple[np.
     return position, adjacency.indices[np.repeat(starts, lengths) + offsets]
 
 
+def _adjacent(adjacency: sparse.csr_matrix, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(k,) bool: whether vertices a[i] and b[i] share an edge (sorted edge keys, one search)."""
+    n = adjacency.shape[0]
+    adjacency.sort_indices()
+    keys = np.repeat(np.arange(n, dtype=np.int64), np.diff(adjacency.indptr)) * n + adjacency.indices
+    wanted = a.astype(np.int64) * n + b
+    position = np.minimum(np.searchsorted(keys, wanted), max(len(keys) - 1, 0))
+    return (keys[position] == wanted) if len(keys) else np.zeros(len(wanted), dtype=bool)
+
+
 def ring_consistent(adjacency: sparse.csr_matrix, partner: np.ndarray) -> np.ndarray:
     """(N,) bool: paired vertices whose every neighbour is paired with a neighbour of their twin, and whose
     twin has as many neighbours (``partner`` (N,): twin index, itself on the midline, -1 unpaired)."""
@@ -49,7 +59,7 @@ def ring_consistent(adjacency: sparse.csr_matrix, partner: np.ndarray) -> np.nda
     paired = partner >= 0
     edge_ok = paired[source] & paired[neighbour]
     check = np.flatnonzero(edge_ok)
-    edge_ok[check] = np.asarray(adjacency[partner[source[check]], partner[neighbour[check]]]).ravel() > 0
+    edge_ok[check] = _adjacent(adjacency, partner[source[check]], partner[neighbour[check]])
     bad = np.bincount(source[~edge_ok], minlength=len(partner)) > 0
     return paired & ~bad & (degree == degree[np.maximum(partner, 0)])
 

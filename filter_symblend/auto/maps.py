@@ -86,14 +86,15 @@ def pairs_map(surface: Surface, partner: np.ndarray, normal: np.ndarray, config:
     return MirrorMap(name, surface, predict, normal, np.eye(3) - 2.0 * np.outer(normal, normal))
 
 
-def registered_map(start: MirrorMap, config: AutoConfig, samples: int | None = None) -> MirrorMap:
+def registered_map(start: MirrorMap, config: AutoConfig, screening: bool = False) -> MirrorMap:
     """The map ``start`` (a plane, an affine map), corrected by a smooth field that moves its predictions
-    onto the shape (coherent point drift, :mod:`.registration`) on ``samples`` spread vertices (default
-    ``config.registration_samples``)."""
+    onto the shape (coherent point drift, :mod:`.registration`) on ``config.registration_samples`` spread
+    vertices; ``screening``: on half of them and with half the iterations, to compare starts."""
     surface = start.surface
-    sample = registration_sample(surface, samples or config.registration_samples)
+    share = 2 if screening else 1
+    sample = registration_sample(surface, config.registration_samples // share)
     points, normals = surface.points[sample], surface.normals[sample]
     field = coherent_point_drift(points, start.predict(points), normals, start.mirror_normals(normals),
-                                 0.3 * surface.spacing, config.registration_iterations)
+                                 0.3 * surface.spacing, config.registration_iterations // share)
     return MirrorMap(f"registration from the {start.name}", surface, lambda x: field(start.predict(x)), start.normal,
                      start.linear)

@@ -22,7 +22,7 @@ import numpy as np
 from scipy.sparse.csgraph import connected_components
 
 from ..asymmetry import fit_mirror_plane
-from ..errors import GeometryError, SymmetryNotFoundError
+from ..errors import DegenerateNeighbourhoodError, GeometryError, SymmetryNotFoundError
 from ..geometry import reflection_across_plane, voxel_grid
 from ..neighbourhoods import connecting_width, mean_nearest_spacing, pair_weights
 from ..parameters import CORE, PARAMETERS
@@ -32,12 +32,13 @@ from .config import DEFAULT, AutoConfig
 from .connectivity import ring_consistent, tessellation_mirror
 from .growth import _one_pair_per_vertex, grow_and_prune
 from .maps import MirrorMap, affine_map, pairs_map, plane_map, registered_map
-from .surface import Surface
+from .surface import Surface, build_surface
 from .twins import find_twins
 
 COINCIDENT = 1e-9  # x diagonal: landmark positions closer than this are one position
 CORE_NAMES = frozenset(p.name for p in PARAMETERS if p.layer in CORE)
 SCREEN_SOURCES = 4000  # vertices on which maps and outputs are compared (a share is measured to about 1 %)
+WIDENINGS = 4  # times theta_width may double where automatic pairs' neighbourhoods are flat (a straight outline)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -75,7 +76,7 @@ def _first_map(surface: Surface, config: AutoConfig, progress) -> tuple[MirrorMa
         """Record ``mirror`` and its coverage; whether it mirrors enough to stop looking."""
         if mirror is None:
             return False
-        tried.append((mirror, float(np.mean(find_twins(mirror, sources).covered(tolerance)))))
+        tried.append((mirror, float(np.mean(find_twins(mirror, sources, tolerance).covered(tolerance)))))
         return tried[-1][1] >= config.plane_suffices
 
     def report(percent: float) -> None:
@@ -94,14 +95,15 @@ def _first_map(surface: Surface, config: AutoConfig, progress) -> tuple[MirrorMa
             if index >= 2 and max(share for _, share in tried) >= config.min_coverage:
                 break  # the next planes are for a strong bend that leaves the first ones far off
             report(20.0 + 50.0 * index / len(starts))
-            done = tried_map(registered_map(start, config, config.registration_samples // 2))
+            done = tried_map(registered_map(start, config, screening=True))
             if done:
                 break
         if not done:
             report(70.0)
-            screened = [share for _, share in tried[2:]]
-            refined = registered_map(starts[int(np.argmax(screened))], config)  # the starts screened, in order
-            done = tried_map(dataclasses.replace(refined, name=refined.name + f" ({config.registration_samples} points)"))
+            screened = [share for _, share in tried[2:]]  # one per start tried, in order
+            start = starts[int(np.argmax(screened))]
+            refined = registered_map(start, config)
+            done = tried_map(dataclasses.replace(refined, name=f"{refined.name} ({config.registration_samples} points)"))
     if not done:
         report(90.0)
         ranked = [mirror for mirror, _ in sorted(tried, key=lambda entry: -entry[1])]
@@ -112,7 +114,7 @@ def _first_map(surface: Surface, config: AutoConfig, progress) -> tuple[MirrorMa
         listed = ", ".join(f"{name} {value:.0%}" for name, value in coverage.items())
         raise SymmetryNotFoundError(
             f"No mirror symmetry found: the best mirror map ({best.name}) mirrors {share:.0%} of the "
-            f"surface within {config.landing_tolerance:.1%} of its size ({listed}); a mirror-symmetric shape, even "
+            f"surface within {100 * config.landing_tolerance:g}% of its size ({listed}); a mirror-symmetric shape, even "
             f"bent or compressed, needs {config.min_coverage:.0%}. Place landmark pairs and use pairs='landmarks' "
             "(or 'landmarks+auto').")
     return best, coverage, planes[0]
@@ -125,7 +127,7 @@ def _tessellation_map(surface: Surface, maps: list[MirrorMap], sources: np.ndarr
     if not surface.is_mesh:
         return None
     for mirror in maps:
-        twins = find_twins(mirror, sources)
+        twins = find_twins(mirror, sources, config.landing_tolerance * surface.diagonal)
         covered = twins.covered(config.landing_tolerance * surface.diagonal)
         tolerance = _robust_tolerance(twins.landing[covered], config, COINCIDENT * surface.diagonal)
         exact = twins.exact_vertex(config, tolerance) & covered
@@ -152,8 +154,8 @@ def find_pairs(mirror: MirrorMap, geometry: Surface, sources: np.ndarray, fixed:
     rounds pass the first round's answer)."""
     surface = mirror.surface
     n = len(surface.points)
-    twins = find_twins(mirror, sources)
-    covered = twins.covered(config.landing_tolerance * surface.diagonal)
+    twins = find_twins(mirror, sources, config.landing_tolerance * geometry.diagonal)
+    covered = twins.covered(config.landing_tolerance * geometry.diagonal)
     covered &= ~forbidden[twins.corners].any(axis=1)
     if not covered.any():
         raise GeometryError("Automatic pairing found no vertex whose mirror image lies on the surface.")
@@ -163,8 +165,9 @@ def find_pairs(mirror: MirrorMap, geometry: Surface, sources: np.ndarray, fixed:
     if fixed is not None:
         partner[fixed.left], partner[fixed.right], partner[fixed.midline] = fixed.right, fixed.left, fixed.midline
     exact_twins = twins.exact_vertex(config, tolerance) & covered & ~forbidden[twins.vertex]
+    beyond_chance = exact_twins & (surface.chance_ratio(twins.ratio) <= config.ratio)
     info = {"map": mirror.name, "twins": float(np.mean(covered)),
-            "vertex_twins": float(np.count_nonzero(exact_twins) / np.count_nonzero(covered))}
+            "vertex_twins": float(np.count_nonzero(beyond_chance) / np.count_nonzero(covered))}
     index = np.arange(n)
     if exact is None:
         exact = info["vertex_twins"] >= config.vertex_twins
@@ -180,13 +183,15 @@ def find_pairs(mirror: MirrorMap, geometry: Surface, sources: np.ndarray, fixed:
             info["tessellation_mirror"] = mirrored is not None
             if mirrored is not None:
                 # Where the tessellation stops mirroring (a midline strip triangulated one way), its pairs can be
-                # wrong: those are left to the geometric growth from the pairs whose rings map whole.
-                partner[:] = np.where(ring_consistent(surface.adjacency, mirrored) & ~forbidden, mirrored, -1)
+                # wrong: those are left to the geometric growth from the pairs whose rings map whole, which are
+                # exact whatever the geometry around them (a joint), and so are not pruned.
+                whole = ring_consistent(surface.adjacency, mirrored) & ~forbidden
+                partner[:] = np.where(whole, mirrored, -1)
                 if fixed is not None:
                     partner[fixed.left], partner[fixed.right] = fixed.right, fixed.left
                     partner[fixed.midline] = fixed.midline
                 info.update(grow_and_prune(surface, geometry, partner, in_sample & ~forbidden,
-                                           surface.usable & ~forbidden, forbidden, config, floor))
+                                           surface.usable & ~forbidden, forbidden | whole, config, floor))
         automatic = (partner >= 0) & ~forbidden
         gap = surface.points - surface.points[np.maximum(partner, 0)]
         left = np.flatnonzero(automatic & (partner != index) & (gap @ mirror.normal > 0))
@@ -296,7 +301,7 @@ def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, l
         forbidden[excluded] = True
     if landmarks is not None:
         forbidden[np.concatenate([landmarks.left, landmarks.right, landmarks.midline])] = True
-    surface = Surface(points, faces, excluded=np.flatnonzero(forbidden))
+    surface = build_surface(points, faces, excluded=np.flatnonzero(forbidden))
     if len(surface.usable_index) < 4:
         raise GeometryError(f"The mesh has {len(surface.usable_index)} vertices that can be paired (on a triangle "
                             "with an area, not excluded); automatic pairs need more.")
@@ -327,12 +332,20 @@ def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, l
         exact_twins = pairs.info["twins_are"] == "exact vertices"
         checked = _landmarks(points, pairs, landmarks, options["landmark_priority"])
         solve_options = _connected_options(points, checked, core)
-        candidate = solve(points, checked, solve_options, scaled_progress(progress, start, step), warn=False)
+        for widening in range(WIDENINGS + 1):
+            try:
+                candidate = solve(points, checked, solve_options, scaled_progress(progress, start, step), warn=False)
+                break
+            except DegenerateNeighbourhoodError:
+                if widening == WIDENINGS:
+                    raise
+                solve_options = {**solve_options, "theta_width": 2.0 * solve_options["theta_width"]}
         entry = {**pairs.info, "pairs": int(len(checked.left) - (0 if landmarks is None else len(landmarks.left))),
                  "midline": int(len(checked.midline) - (0 if landmarks is None else len(landmarks.midline))),
                  "surface_asymmetry": surface_asymmetry(surface, candidate, scored)}
-        if solve_options["phi_width"] != core["phi_width"]:
-            entry["phi_width"] = solve_options["phi_width"]
+        for width in ("phi_width", "theta_width"):
+            if solve_options[width] != core[width]:
+                entry[width] = solve_options[width]
         return candidate, entry
 
     stopped, source = "round limit", mirror
@@ -361,13 +374,9 @@ def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, l
         # The rounds found the twins with fewer pairs; the output is solved with all of them.
         if progress is not None:
             progress(20.0 + rounds_allowed * step, f"automatic pairs: the solve with {count} pairs")
-        candidate, entry = attempt(source, count, 20.0 + rounds_allowed * step)
+        result, entry = attempt(source, count, 20.0 + rounds_allowed * step)
         entry["final"] = True
         history.append(entry)
-        if entry["surface_asymmetry"] <= best * (1.0 + 1e-9):
-            result = candidate
-        else:
-            entry["kept"] = False
     if progress is not None:
         progress(100.0, "done")
     return _final(points, surface.representative, result, landmarks, report, stopped, clock)

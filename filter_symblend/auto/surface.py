@@ -6,6 +6,10 @@ welded: the triangles refer to the first of them, which alone can be paired, and
 others follow the warp, which moves equal positions equally. Only vertices of a
 triangle with an area (every vertex of a point cloud) can be paired. Vertices the
 caller excludes (a missing or broken part) are neither paired nor twins.
+
+A flat mesh (a drawing, a 2D outline triangulated) is paired by its outline: every
+point inside the region mirrors onto the region whatever its shape, so only the
+boundary says how symmetric the shape is (:class:`Outline`).
 """
 
 from __future__ import annotations
@@ -15,7 +19,7 @@ import functools
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..geometry import normalize
+from ..geometry import flat_normal, normalize
 from ..mesh_geometry import vertex_normals
 from ..mirror_fill import nearest_on_triangles
 
@@ -137,6 +141,11 @@ class Surface:
         corners = self.faces[self.triangles[face]]
         return point, distance, self.face_normals[face], corners, barycentric(self.points[corners], point)
 
+    @staticmethod
+    def chance_ratio(ratio: np.ndarray) -> np.ndarray:
+        """Ratio test values on the scale of a surface's chances (:meth:`Outline.chance_ratio`): themselves."""
+        return ratio
+
     def nearest_vertices(self, queries: np.ndarray):
         """(nearest usable vertex (Q,), its distance (Q,), nearest / second-nearest distance (Q,))."""
         k = min(2, len(self.usable_index))
@@ -159,3 +168,97 @@ def barycentric(corners: np.ndarray, points: np.ndarray) -> np.ndarray:
     s, t = (vv * wu - uv * wv) / safe, (uu * wv - uv * wu) / safe
     weights = np.clip(np.column_stack([1.0 - s - t, s, t]), 0.0, 1.0)
     return weights / weights.sum(axis=1, keepdims=True)
+
+
+class Outline(Surface):
+    """A flat mesh seen by its outline: the boundary edges of its triangles (the edges of one triangle
+    only). The outline's vertices are the ones that may pair; the nearest point of the "surface" is the
+    nearest point of the outline, with the in-plane normal pointing out of the region."""
+
+    def __init__(self, points: np.ndarray, faces: np.ndarray, normal: np.ndarray,
+                 excluded: np.ndarray | None = None, edges: np.ndarray | None = None, usable: np.ndarray | None = None):
+        super().__init__(points, faces, excluded, usable)
+        self.flat = normal
+        if edges is None:
+            edges = _boundary_edges(self.faces[self.triangles], self.points, normal)
+            outline = np.zeros(len(self.points), dtype=bool)
+            outline[edges.ravel()] = True
+            self.usable = self.usable & outline
+            self.usable_index = np.flatnonzero(self.usable)
+        self.edges = edges
+
+    def moved(self, points: np.ndarray) -> "Outline":
+        moved = Outline(points, self.faces, self.flat, edges=self.edges, usable=self.usable)
+        moved.representative = self.representative
+        moved.__dict__.update(triangles=self.triangles, local_spacing=self.local_spacing, spacing=self.spacing)
+        return moved
+
+    @functools.cached_property
+    def edge_normals(self) -> np.ndarray:
+        """(E, 3) unit in-plane normals of the outline's edges, pointing out of the region."""
+        a, b = self.points[self.edges[:, 0]], self.points[self.edges[:, 1]]
+        return normalize(np.cross(b - a, self.flat))
+
+    @functools.cached_property
+    def normals(self) -> np.ndarray:
+        summed = np.zeros_like(self.points)
+        for end in (0, 1):
+            np.add.at(summed, self.edges[:, end], self.edge_normals)
+        return normalize(summed)
+
+    @functools.cached_property
+    def adjacency(self):
+        """No connectivity mirror for an outline: any closed polyline mirrors onto itself as a graph."""
+        import scipy.sparse as sparse
+        return sparse.csr_matrix((len(self.points), len(self.points)))
+
+    @staticmethod
+    def chance_ratio(ratio: np.ndarray) -> np.ndarray:
+        """An outline's ratio test values (nearest / second-nearest vertex) put on a surface's scale: a point
+        dropped at random on a polyline passes nearest <= r * second with chance 2r / (1 + r), on a
+        triangulated surface (a vertex's disc in its Voronoi cell) with chance about
+        (2 pi / sqrt 3) (r / (1 + r))^2; each ratio maps to the surface ratio of equal chance, so that one
+        threshold says "not by chance" equally on both."""
+        chance = 2.0 * ratio / (1.0 + ratio)
+        share = np.sqrt(chance / (2.0 * np.pi / np.sqrt(3.0)))  # r / (1 + r) of the equal-chance surface ratio
+        return np.divide(share, 1.0 - share, out=np.full(len(share), np.inf), where=share < 1.0)
+
+    @functools.cached_property
+    def _middle_tree(self) -> cKDTree:
+        return cKDTree(0.5 * (self.points[self.edges[:, 0]] + self.points[self.edges[:, 1]]))
+
+    def nearest_points(self, queries: np.ndarray):
+        a, b = self.points[self.edges[:, 0]], self.points[self.edges[:, 1]]
+        k = min(8, len(self.edges))
+        _, candidates = self._middle_tree.query(queries, k=k)
+        candidates = candidates.reshape(len(queries), k)
+        start, direction = a[candidates], b[candidates] - a[candidates]
+        along = np.einsum("qki,qki->qk", queries[:, None, :] - start, direction)
+        t = np.clip(along / np.maximum(np.einsum("qki,qki->qk", direction, direction), 1e-300), 0.0, 1.0)
+        found = start + t[:, :, None] * direction
+        gaps = np.linalg.norm(found - queries[:, None, :], axis=2)
+        best = gaps.argmin(axis=1)
+        rows = np.arange(len(queries))
+        edge, t = candidates[rows, best], t[rows, best]
+        corners = np.column_stack([self.edges[edge], self.edges[edge, 1]])
+        weights = np.column_stack([1.0 - t, t, np.zeros(len(t))])
+        return found[rows, best], gaps[rows, best], self.edge_normals[edge], corners, weights
+
+
+def _boundary_edges(faces: np.ndarray, points: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """(E, 2) the edges of ``faces`` (F, 3) that belong to one face only, each directed so that the region
+    is on its left seen from ``normal`` (3,) (its face's winding, made counter-clockwise about it)."""
+    corners = points[faces]
+    facing = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]) @ normal
+    oriented = np.where((facing >= 0)[:, None], faces, faces[:, ::-1])
+    directed = np.concatenate([oriented[:, [0, 1]], oriented[:, [1, 2]], oriented[:, [2, 0]]])
+    key = np.sort(directed, axis=1)
+    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    return directed[counts[inverse.ravel()] == 1]
+
+
+def build_surface(points: np.ndarray, faces: np.ndarray, excluded: np.ndarray | None = None) -> Surface:
+    """The :class:`Surface` of a mesh, or its :class:`Outline` if the mesh is flat."""
+    surface = Surface(points, faces, excluded)
+    normal = flat_normal(points[surface.usable_index]) if surface.is_mesh and len(surface.usable_index) > 2 else None
+    return surface if normal is None else Outline(points, faces, normal, excluded)

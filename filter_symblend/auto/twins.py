@@ -51,15 +51,17 @@ class Twins:
         return self.sound & self.mutual & (self.ratio <= config.ratio) & (self.vertex_distance <= tolerance)
 
 
-def find_twins(mirror: MirrorMap, sources: np.ndarray) -> Twins:
-    """The twins of ``sources`` (m,) (vertex indices) under ``mirror``."""
+def find_twins(mirror: MirrorMap, sources: np.ndarray, tolerance: float) -> Twins:
+    """The twins of ``sources`` (m,) (vertex indices) under ``mirror``; a round trip counts as consistent
+    within the local vertex spacing or ``tolerance`` (mesh units, the landing tolerance), whichever is larger
+    (on a fine scan the map's own inconsistency is the scan's asymmetry, not the vertex spacing)."""
     surface = mirror.surface
     positions = surface.points[sources]
     predicted = mirror.predict(positions)
     point, landing, twin_normal, corners, weights = surface.nearest_points(predicted)
     back, _, _ = surface.nearest_vertices(mirror.predict(point))  # (a vertex: the round trip's own error is small)
     round_trip = np.linalg.norm(surface.points[back] - positions, axis=1)
-    sound = np.isfinite(predicted).all(axis=1) & (round_trip <= surface.local_spacing[sources])
+    sound = np.isfinite(predicted).all(axis=1) & (round_trip <= np.maximum(surface.local_spacing[sources], tolerance))
     if surface.is_mesh:
         sound &= np.einsum("ni,ni->n", mirror.mirror_normals(surface.normals[sources]), twin_normal) > 0
     vertex, vertex_distance, ratio = surface.nearest_vertices(predicted)
