@@ -230,10 +230,13 @@ def _symmetrize(args) -> int:
         before, after = report["landmark_asymmetry_before"], report["landmark_asymmetry_after"]
         landmark_line = (f"landmark asymmetry RMS {before['rms_relative']:.2%} -> {after['rms_relative']:.1e} "
                          "of the diagonal; ")
-    print(f"{args.output}: {pairs}, mode {report['mode']}; {landmark_line}mirror asymmetry RMS "
-          f"{report['mirror_asymmetry_before']['rms_relative']:.2%} -> "
-          f"{report['mirror_asymmetry_after']['rms_relative']:.2%}; two-way Hausdorff input<->output "
-          f"{report['hausdorff_input_output']['max']:.4g}")
+    checks = ""
+    if "mirror_asymmetry_before" in report:
+        checks = (f"mirror asymmetry RMS {report['mirror_asymmetry_before']['rms_relative']:.2%} -> "
+                  f"{report['mirror_asymmetry_after']['rms_relative']:.2%}")
+    if "hausdorff_input_output" in report:
+        checks += f"; two-way Hausdorff input<->output {report['hausdorff_input_output']['max']:.4g}"
+    print(f"{args.output}: {pairs}, mode {report['mode']}; {landmark_line}{checks}".rstrip("; "))
     return 0
 
 

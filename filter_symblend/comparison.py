@@ -5,31 +5,36 @@ from __future__ import annotations
 import numpy as np
 import pymeshlab
 
-from .asymmetry import fit_mirror_plane
+from .asymmetry import MirrorFit, fit_mirror_plane
 from .attributes import optional_attribute
 from .hausdorff import two_way_hausdorff
 from .landmarks import pairs_from_attribute
 from .parameters import DEFAULTS
-from .surface_symmetry import mirror_asymmetry
+from .surface_symmetry import fit_surface_mirror_plane, mirror_asymmetry, refine_mirror_plane
 
 
-def _landmark_plane(mesh: pymeshlab.Mesh, pair_attribute: str):
-    labels = optional_attribute(mesh, pair_attribute)
-    if labels is None or np.count_nonzero(labels) < 6:
-        return None
-    pairs = pairs_from_attribute(labels, pair_attribute)
+def _mirror_plane(mesh: pymeshlab.Mesh, pair_attribute: str, start) -> tuple[np.ndarray, float]:
+    """The mesh's mirror plane: refined from its landmark pairs' plane when it carries them, else
+    fitted from the principal planes and ``start`` (the other mesh's plane), else fitted from scratch."""
     points = mesh.vertex_matrix()
-    return fit_mirror_plane(points[pairs.left], points[pairs.right])
+    labels = optional_attribute(mesh, pair_attribute)
+    if labels is not None and np.count_nonzero(labels) >= 6:
+        pairs = pairs_from_attribute(labels, pair_attribute)
+        fit = fit_mirror_plane(points[pairs.left], points[pairs.right])
+        return refine_mirror_plane(points, fit.normal, fit.offset)
+    return fit_surface_mirror_plane(points, None if start is None else MirrorFit(*start, np.zeros(0)))
 
 
 def compare_layers(ms: pymeshlab.MeshSet, before: int, after: int,
                    pair_attribute: str = DEFAULTS["pair_attribute"]) -> dict:
     """``{"hausdorff_before_after", "mirror_asymmetry_before", "mirror_asymmetry_after"}`` for two
-    layers of ``ms``; each mirror asymmetry also holds ``per_vertex`` (N,). The planes start from
-    the landmark pairs when a layer carries ``pair_attribute``. The layers are not changed."""
+    layers of ``ms``; each mirror asymmetry also holds ``per_vertex`` (N,). Each plane is refined from
+    the layer's landmark pairs (``pair_attribute``) when it carries them; otherwise the first layer's
+    is fitted and the second's refined from it. The layers are not changed."""
     result = {"hausdorff_before_after": two_way_hausdorff(ms, before, after)}
+    plane = None
     for key, mesh_id in (("mirror_asymmetry_before", before), ("mirror_asymmetry_after", after)):
         mesh = ms.mesh(mesh_id)
-        result[key] = mirror_asymmetry(mesh.vertex_matrix(), mesh.face_matrix(),
-                                       _landmark_plane(mesh, pair_attribute))
+        plane = _mirror_plane(mesh, pair_attribute, plane)
+        result[key] = mirror_asymmetry(mesh.vertex_matrix(), mesh.face_matrix(), plane=plane)
     return result

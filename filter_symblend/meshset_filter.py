@@ -26,7 +26,7 @@ from .errors import MeshSetError, ParameterError, SymblendWarning
 from .hausdorff import two_way_hausdorff
 from .mirror_fill import fill_from_mirror
 from .parameters import PARAMETERS, keyword_signature, parameters_doc, validate_parameters
-from .surface_symmetry import mirror_asymmetry
+from .surface_symmetry import mirror_asymmetry, refine_mirror_plane
 from .pipeline import symmetrize
 from .symmetrize import SymmetrizationResult
 
@@ -134,7 +134,6 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress) -> SymmetrizationRes
         pairs, left_weights, right_weights = read_landmark_attributes(mesh, **names)
         result = symmetrize(points, pairs.left, pairs.right, pairs.ids, pairs.midline,
                             left_weights, right_weights, progress, faces, auto_excluded=excluded, **core)
-        left, right = pairs.left, pairs.right
     report = result.report
     if region is not None:
         missing, excluded = region
@@ -146,15 +145,17 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress) -> SymmetrizationRes
         transform = np.array(report["canonical_from_input"])
         result = dataclasses.replace(result, points=result.points @ transform[:3, :3].T + transform[:3, 3])
         report.update(output_frame="canonical", plane_normal=[1.0, 0.0, 0.0], plane_offset=0.0)
-    if automatic:  # the surface plane of the input was fitted by the automatic pairing already
-        surface = report["auto_pairs"]["surface_plane"]
-        before = mirror_asymmetry(points, faces, plane=(np.array(surface["normal"]), surface["offset"]))
-        after = mirror_asymmetry(result.points, faces)
-    else:  # the landmarks' mirror plane is one more starting plane
-        before = mirror_asymmetry(points, faces, fit_mirror_plane(points[left], points[right]))
-        after = mirror_asymmetry(result.points, faces, fit_mirror_plane(result.points[left], result.points[right]))
-    report["mirror_asymmetry_before"] = {k: v for k, v in before.items() if k != "per_vertex"}
-    report["mirror_asymmetry_after"] = {k: v for k, v in after.items() if k != "per_vertex"}
+    if options["checks"] != "none":
+        if automatic:  # the automatic pairing fitted the input's surface plane already
+            surface = report["auto_pairs"]["surface_plane"]
+            input_plane = np.array(surface["normal"]), surface["offset"]
+        else:
+            landmarks = fit_mirror_plane(points[pairs.left], points[pairs.right])
+            input_plane = refine_mirror_plane(points, landmarks.normal, landmarks.offset)
+        before = mirror_asymmetry(points, faces, plane=input_plane)
+        after = mirror_asymmetry(result.points, faces, plane=(np.array(report["plane_normal"]), report["plane_offset"]))
+        report["mirror_asymmetry_before"] = {k: v for k, v in before.items() if k != "per_vertex"}
+        report["mirror_asymmetry_after"] = {k: v for k, v in after.items() if k != "per_vertex"}
     return result
 
 
@@ -183,8 +184,8 @@ def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict |
     carried = {name: values for name in names if (values := optional_attribute(mesh, name)) is not None}
     with recording.recorded_call(ms, options):  # our native steps, saved as one node of ours
         output_id = _add_output_layer(ms, input_id, result, carried)
-        hausdorff = two_way_hausdorff(ms, input_id, output_id)
-    return {**result.report, "hausdorff_input_output": hausdorff,
+        hausdorff = two_way_hausdorff(ms, input_id, output_id) if options["checks"] == "full" else {}
+    return {**result.report, **({"hausdorff_input_output": hausdorff} if hausdorff else {}),
             "input_mesh_id": input_id, "output_mesh_id": output_id}
 
 

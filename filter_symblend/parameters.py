@@ -189,6 +189,17 @@ PARAMETERS: tuple[Parameter, ...] = (
         choices=("none", "weight", "selection"), layer="meshset",
     ),
     Parameter(
+        "checks", "enum", "mirror", "Before/after checks",
+        "What the report measures besides the landmarks. 'mirror': the surface's mirror asymmetry before "
+        "and after, the distance from every vertex to the surface reflected across a mirror plane (the "
+        "input's: refined from the landmarks' plane, or the automatic pairs' plane; the output's: the plane "
+        "of the solve), by MeshLab's closest points; a fraction of the filter's time. 'full': also the "
+        "two-way Hausdorff distance between input and output (MeshLab's `get_hausdorff_distance` from the "
+        "vertices of each to the other; on a large mesh that is moved far it costs as much as the warp). "
+        "'none': neither.",
+        choices=("mirror", "full", "none"), layer="meshset",
+    ),
+    Parameter(
         "output_frame", "enum", "input", "Output frame",
         "'input': the result rigidly fitted back onto the input landmarks, for "
         "before/after comparison. 'canonical': symmetry plane x = 0, left (+k) "

@@ -16,14 +16,21 @@ Seconds are the filter's own stage timings (median of --repeat runs).
                                              # 10-100 landmarks, automatic pairs on the Igea scan
     python scripts/benchmark.py --corpus     # pairs='auto' on every mesh of ../shared/data and pymeshlab's
                                              # samples, as given and deformed; synthetic meshes as they come
+    python scripts/benchmark.py --filter     # what the user runs: the MeshSet filter against its core, and
+                                             # `symblend report`, each in its own process (time, peak RSS)
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import pathlib
+import resource
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
 import tracemalloc
 import warnings
@@ -538,6 +545,97 @@ def corpus_main() -> None:
         print("| " + " | ".join(cells) + " |", flush=True)
 
 
+# --filter rows: (name, Igea faces after decimation or None for subdivided twice, landmark pairs, checks)
+FILTER_ROWS = (("igea 32k", 64_000, 1000, "mirror"), ("igea 32k", 64_000, 1000, "full"),
+               ("igea 1M", None, 2000, "mirror"))
+REPORT_ROWS = (("igea 61k", 122_000), ("igea 1M", None))
+
+
+def _filter_mesh(path: pathlib.Path, faces: int | None) -> None:
+    """Igea decimated to ``faces`` faces (None: subdivided twice, 1.02 x 10^6 vertices), bent and compressed
+    (the paper's Figure 1 map), with about 2,000 approximate mirror pairs as attributes: a PLY at ``path``."""
+    if faces is None:
+        *_, (_, points, triangles) = igea_meshes()
+    else:
+        ms = pymeshlab.MeshSet()
+        ms.load_new_mesh(str(IGEA))
+        ms.meshing_remove_unreferenced_vertices()
+        ms.meshing_decimation_quadric_edge_collapse(targetfacenum=faces)
+        points, triangles = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=synthetic.figure_1_deformation(points), face_matrix=triangles))
+    ms.save_current_mesh(str(path))
+
+
+def filter_row(mesh: str, pairs: int, checks: str) -> None:
+    """One --filter row in this process: print JSON {vertices, core, total seconds, peak RSS MB}."""
+    import filter_symblend  # noqa: F401  (binds the filter)
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(mesh)
+    points = ms.current_mesh().vertex_matrix()
+    [(_, left, right)] = scan_pairs(points, [pairs])
+    labels = np.zeros(len(points))
+    labels[left], labels[right] = np.arange(1, len(left) + 1), -np.arange(1, len(left) + 1)
+    ms.current_mesh().add_vertex_custom_scalar_attribute(labels, "symblend_pair")
+    options = {**SCAN_OPTIONS, **({} if checks == "default" else {"checks": checks})}
+    start = time.perf_counter()
+    report = ms.generate_symmetrized_mesh(**options)
+    total = time.perf_counter() - start
+    ms.save_current_mesh(mesh.replace(".ply", "_out.ply"))
+    print(json.dumps({"vertices": len(points), "pairs": len(left), "core": report["seconds"]["total"],
+                      "total": total, "rss": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
+
+
+def _child(arguments: list[str]) -> tuple[str, float]:
+    """Run a command; (its stdout, wall seconds)."""
+    start = time.perf_counter()
+    done = subprocess.run(arguments, capture_output=True, text=True, check=True)
+    return done.stdout, time.perf_counter() - start
+
+
+# `symblend report` as the console script runs it, then the process's own peak RSS (MB) on the last line.
+REPORT_PROCESS = ("import resource, sys; from filter_symblend.cli import main; code = main(sys.argv[1:]); "
+                  "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024); sys.exit(code)")
+
+
+def filter_main() -> None:
+    """The MeshSet filter as a user calls it, against its core (report seconds.total), and `symblend report`
+    on its output; every row in a fresh process, so its peak RSS is its own."""
+    if not IGEA.exists():
+        print(f"--filter: skipped, {IGEA} is absent")
+        return
+    print(f"\nThe whole filter against its core ({time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores): Igea, "
+          "Figure 1 map, approximate mirror pairs; standard mode, phi width 8; peak RSS of the process")
+    print("| mesh | vertices | pairs | checks | core s | filter s | filter / core | peak RSS MB |")
+    print("|---|---|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as folder:
+        made = {}
+        for name, faces, pairs, checks in FILTER_ROWS:
+            path = made.setdefault(name, str(pathlib.Path(folder) / f"{name.replace(' ', '_')}.ply"))
+            if not pathlib.Path(path).exists():
+                _filter_mesh(pathlib.Path(path), faces)
+            out, _ = _child([sys.executable, __file__, "--filter-row", path, str(pairs), checks])
+            row = json.loads(out.strip().splitlines()[-1])
+            print(f"| {name} | {row['vertices']:,} | {row['pairs']:,} | {checks} | {row['core']:.2f} | "
+                  f"{row['total']:.2f} | {row['total'] / row['core']:.2f} | {row['rss']:.0f} |", flush=True)
+        print("\n`symblend report BEFORE AFTER` (the process as a whole, start-up included)")
+        print("| mesh | vertices | s | peak RSS MB |")
+        print("|---|---|---|---|")
+        for name, faces in REPORT_ROWS:
+            path = made.get(name) or str(pathlib.Path(folder) / f"{name.replace(' ', '_')}.ply")
+            if not pathlib.Path(path).exists():
+                _filter_mesh(pathlib.Path(path), faces)
+            after = path.replace(".ply", "_out.ply")
+            if not pathlib.Path(after).exists():
+                _child([sys.executable, __file__, "--filter-row", path, "2000", "none"])
+            out, seconds = _child([sys.executable, "-c", REPORT_PROCESS, "report", path, after])
+            rss = float(out.strip().splitlines()[-1])
+            vertices = pymeshlab.MeshSet()
+            vertices.load_new_mesh(path)
+            print(f"| {name} | {vertices.current_mesh().vertex_number():,} | {seconds:.1f} | {rss:.0f} |", flush=True)
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--pairs", type=int, nargs="+", default=[100, 300, 1000])
@@ -546,6 +644,8 @@ def main(argv=None) -> None:
     parser.add_argument("--scale", action="store_true", help="speed and memory at scale, and Table 1")
     parser.add_argument("--auto", action="store_true", help="automatic pairs against 100 landmark pairs")
     parser.add_argument("--corpus", action="store_true", help="automatic pairs over every corpus mesh")
+    parser.add_argument("--filter", action="store_true", help="the MeshSet filter against its core; symblend report")
+    parser.add_argument("--filter-row", nargs=3, metavar=("MESH", "PAIRS", "CHECKS"), help=argparse.SUPPRESS)
     parser.add_argument("--levels", type=int, default=4, help="--scale: subdivisions of the cow (4: 743k vertices)")
     parser.add_argument("--scale-pairs", type=int, nargs="+", default=[100, 1000, 10000, 100000])
     parser.add_argument("--warp-pairs", type=int, nargs="+", default=[2000, 20000],
@@ -557,6 +657,12 @@ def main(argv=None) -> None:
         return
     if args.corpus:
         corpus_main()
+        return
+    if args.filter_row:
+        filter_row(args.filter_row[0], int(args.filter_row[1]), args.filter_row[2])
+        return
+    if args.filter:
+        filter_main()
         return
     if args.auto:
         auto_main(args)

@@ -9,6 +9,7 @@ import pytest
 
 import filter_symblend
 from filter_symblend import ASYMMETRY_ATTRIBUTE, PARAMETERS, SymblendWarning, synthetic
+from filter_symblend.mirror_fill import closest_points_on_surface
 
 from conftest import SAMPLE_MESHES, meshset_with_pairs
 
@@ -146,3 +147,28 @@ def test_interrupting_from_progress_leaves_the_meshset_unchanged(bent_cow_meshse
     with pytest.raises(KeyboardInterrupt):
         ms.generate_symmetrized_mesh(progress=interrupt)
     assert_unchanged(ms, before)
+
+
+@pytest.mark.parametrize("checks", ["mirror", "full", "none"])
+def test_checks_measure_each_surface_against_its_reflection(bent_cow_meshset, cow, checks):
+    """Mirror asymmetry: every vertex's distance to the surface reflected across the reported plane (the
+    output's: the solve's own plane), against our own closest points; the Hausdorff only with 'full'."""
+    ms, deformed, left, right = bent_cow_meshset
+    report = ms.generate_symmetrized_mesh(mode="affine", checks=checks)
+    assert ("hausdorff_input_output" in report) == (checks == "full")
+    if checks == "none":
+        assert "mirror_asymmetry_before" not in report and "mirror_asymmetry_after" not in report
+        return
+    output = ms.current_mesh().vertex_matrix()
+    after = report["mirror_asymmetry_after"]
+    assert after["plane_normal"] == report["plane_normal"] and after["plane_offset"] == report["plane_offset"]
+    for key, points in (("mirror_asymmetry_before", deformed), ("mirror_asymmetry_after", output)):
+        normal, offset = np.array(report[key]["plane_normal"]), report[key]["plane_offset"]
+        mirrored = points - 2 * (points @ normal - offset)[:, None] * normal
+        distances = np.linalg.norm(closest_points_on_surface(mirrored, cow.faces, points) - points, axis=1)
+        assert report[key]["max"] == pytest.approx(distances.max(), rel=1e-4, abs=1e-7)
+        assert report[key]["rms"] == pytest.approx(np.sqrt(np.mean(distances**2)), rel=2e-3)
+    # The undeformed cow's own plane makes the bent input far from symmetric, the output nearly so.
+    assert after["rms_relative"] < report["mirror_asymmetry_before"]["rms_relative"] / 5
+    if checks == "full":
+        assert 0 < report["hausdorff_input_output"]["max"] <= report["vertex_displacement"]["max"] + 1e-9
