@@ -264,11 +264,13 @@ def _mlx(args) -> int:
 
 def _report(args) -> int:
     from .comparison import compare_layers
+    from .surface_symmetry import CHECK_SAMPLES
 
     ms = _load_mesh(args.before)
     before_id = ms.current_mesh_id()
     after_id = _load_mesh(args.after, ms).current_mesh_id()
-    result = compare_layers(ms, before_id, after_id, args.pair_attribute)
+    # The picture colours every vertex; the numbers alone need a sample.
+    result = compare_layers(ms, before_id, after_id, args.pair_attribute, None if args.png else CHECK_SAMPLES)
     hausdorff = result["hausdorff_before_after"]
     print(f"{'':24}{'max':>12}{'mean':>12}{'RMS':>12}")
     print(f"{'Hausdorff before<->after':24}{hausdorff['max']:12.5g}{hausdorff['mean']:12.5g}{hausdorff['rms']:12.5g}")

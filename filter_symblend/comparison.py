@@ -10,7 +10,7 @@ from .attributes import optional_attribute
 from .hausdorff import two_way_hausdorff
 from .landmarks import pairs_from_attribute
 from .parameters import DEFAULTS
-from .surface_symmetry import fit_surface_mirror_plane, mirror_asymmetry, refine_mirror_plane
+from .surface_symmetry import CHECK_SAMPLES, fit_surface_mirror_plane, mirror_asymmetry, refine_mirror_plane
 
 
 def _mirror_plane(mesh: pymeshlab.Mesh, pair_attribute: str, start) -> tuple[np.ndarray, float]:
@@ -26,9 +26,10 @@ def _mirror_plane(mesh: pymeshlab.Mesh, pair_attribute: str, start) -> tuple[np.
 
 
 def compare_layers(ms: pymeshlab.MeshSet, before: int, after: int,
-                   pair_attribute: str = DEFAULTS["pair_attribute"]) -> dict:
+                   pair_attribute: str = DEFAULTS["pair_attribute"], samples: int | None = CHECK_SAMPLES) -> dict:
     """``{"hausdorff_before_after", "mirror_asymmetry_before", "mirror_asymmetry_after"}`` for two
-    layers of ``ms``; each mirror asymmetry also holds ``per_vertex`` (N,). Each plane is refined from
+    layers of ``ms``; each mirror asymmetry is measured at ``samples`` evenly strided vertices (None:
+    all) and holds their distances as ``per_vertex``. Each plane is refined from
     the layer's landmark pairs (``pair_attribute``) when it carries them; otherwise the first layer's
     is fitted and the second's refined from it. The layers are not changed."""
     result = {"hausdorff_before_after": two_way_hausdorff(ms, before, after)}
@@ -36,5 +37,5 @@ def compare_layers(ms: pymeshlab.MeshSet, before: int, after: int,
     for key, mesh_id in (("mirror_asymmetry_before", before), ("mirror_asymmetry_after", after)):
         mesh = ms.mesh(mesh_id)
         plane = _mirror_plane(mesh, pair_attribute, plane)
-        result[key] = mirror_asymmetry(mesh.vertex_matrix(), mesh.face_matrix(), plane=plane)
+        result[key] = mirror_asymmetry(mesh.vertex_matrix(), mesh.face_matrix(), plane=plane, samples=samples)
     return result

@@ -26,7 +26,7 @@ from .errors import MeshSetError, ParameterError, SymblendWarning
 from .hausdorff import two_way_hausdorff
 from .mirror_fill import fill_from_mirror
 from .parameters import PARAMETERS, keyword_signature, parameters_doc, validate_parameters
-from .surface_symmetry import mirror_asymmetry, refine_mirror_plane
+from .surface_symmetry import CHECK_SAMPLES, mirror_asymmetry, refine_mirror_plane
 from .pipeline import symmetrize
 from .symmetrize import SymmetrizationResult
 
@@ -152,8 +152,9 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress) -> SymmetrizationRes
         else:
             landmarks = fit_mirror_plane(points[pairs.left], points[pairs.right])
             input_plane = refine_mirror_plane(points, landmarks.normal, landmarks.offset)
-        before = mirror_asymmetry(points, faces, plane=input_plane)
-        after = mirror_asymmetry(result.points, faces, plane=(np.array(report["plane_normal"]), report["plane_offset"]))
+        before = mirror_asymmetry(points, faces, plane=input_plane, samples=CHECK_SAMPLES)
+        after = mirror_asymmetry(result.points, faces, plane=(np.array(report["plane_normal"]), report["plane_offset"]),
+                                 samples=CHECK_SAMPLES)
         report["mirror_asymmetry_before"] = {k: v for k, v in before.items() if k != "per_vertex"}
         report["mirror_asymmetry_after"] = {k: v for k, v in after.items() if k != "per_vertex"}
     return result

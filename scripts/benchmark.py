@@ -552,8 +552,7 @@ REPORT_ROWS = (("igea 61k", 122_000), ("igea 1M", None))
 
 
 def _filter_mesh(path: pathlib.Path, faces: int | None) -> None:
-    """Igea decimated to ``faces`` faces (None: subdivided twice, 1.02 x 10^6 vertices), bent and compressed
-    (the paper's Figure 1 map), with about 2,000 approximate mirror pairs as attributes: a PLY at ``path``."""
+    """Igea decimated to ``faces`` faces (None: subdivided twice, 1.02 x 10^6 vertices): a PLY at ``path``."""
     if faces is None:
         *_, (_, points, triangles) = igea_meshes()
     else:
@@ -563,18 +562,23 @@ def _filter_mesh(path: pathlib.Path, faces: int | None) -> None:
         ms.meshing_decimation_quadric_edge_collapse(targetfacenum=faces)
         points, triangles = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
     ms = pymeshlab.MeshSet()
-    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=synthetic.figure_1_deformation(points), face_matrix=triangles))
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=points, face_matrix=triangles))
     ms.save_current_mesh(str(path))
 
 
 def filter_row(mesh: str, pairs: int, checks: str) -> None:
-    """One --filter row in this process: print JSON {vertices, core, total seconds, peak RSS MB}."""
+    """One --filter row in this process, on ``mesh`` bent and compressed (the paper's Figure 1 map) with
+    ``pairs`` approximate mirror pairs found before the deformation: print JSON {vertices, pairs, core and
+    total seconds, peak RSS MB}; the deformed input and the output are saved beside ``mesh`` (_in, _out)."""
     import filter_symblend  # noqa: F401  (binds the filter)
 
-    ms = pymeshlab.MeshSet()
-    ms.load_new_mesh(mesh)
-    points = ms.current_mesh().vertex_matrix()
+    loaded = pymeshlab.MeshSet()
+    loaded.load_new_mesh(mesh)
+    points, faces = loaded.current_mesh().vertex_matrix(), loaded.current_mesh().face_matrix()
     [(_, left, right)] = scan_pairs(points, [pairs])
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=synthetic.figure_1_deformation(points), face_matrix=faces))
+    ms.save_current_mesh(mesh.replace(".ply", "_in.ply"))
     labels = np.zeros(len(points))
     labels[left], labels[right] = np.arange(1, len(left) + 1), -np.arange(1, len(left) + 1)
     ms.current_mesh().add_vertex_custom_scalar_attribute(labels, "symblend_pair")
@@ -626,10 +630,10 @@ def filter_main() -> None:
             path = made.get(name) or str(pathlib.Path(folder) / f"{name.replace(' ', '_')}.ply")
             if not pathlib.Path(path).exists():
                 _filter_mesh(pathlib.Path(path), faces)
-            after = path.replace(".ply", "_out.ply")
+            before, after = path.replace(".ply", "_in.ply"), path.replace(".ply", "_out.ply")
             if not pathlib.Path(after).exists():
                 _child([sys.executable, __file__, "--filter-row", path, "2000", "none"])
-            out, seconds = _child([sys.executable, "-c", REPORT_PROCESS, "report", path, after])
+            out, seconds = _child([sys.executable, "-c", REPORT_PROCESS, "report", before, after])
             rss = float(out.strip().splitlines()[-1])
             vertices = pymeshlab.MeshSet()
             vertices.load_new_mesh(path)

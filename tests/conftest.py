@@ -89,3 +89,16 @@ def meshset_with_pairs(points, faces, left, right, attribute="symblend_pair") ->
     labels[right] = -np.arange(1, len(right) + 1)
     ms.current_mesh().add_vertex_custom_scalar_attribute(labels, attribute)
     return ms
+
+
+def meshlab_mirror_distance(points, faces, measured: dict) -> list[float]:
+    """[max, mean, RMS] of MeshLab's Hausdorff from the mesh to its reflection across the plane that
+    ``measured`` (a mirror asymmetry of the report) names: an independent computation of it."""
+    normal, offset = np.array(measured["plane_normal"]), measured["plane_offset"]
+    mirrored = points - 2 * (points @ normal - offset)[:, None] * normal
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(points, faces))
+    ms.add_mesh(pymeshlab.Mesh(mirrored, faces[:, ::-1]))
+    found = ms.get_hausdorff_distance(sampledmesh=0, targetmesh=1, samplevert=True, sampleface=False,
+                                      maxdist=pymeshlab.PureValue(10.0 * float(np.ptp(points, axis=0).max())))
+    return [found["max"], found["mean"], found["RMS"]]
