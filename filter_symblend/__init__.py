@@ -6,6 +6,10 @@ Symmetries* (SGP 2010). Importing the package binds
 ``save_filter_script`` run and record MeshLab filter scripts that use it.
 """
 
+from .command_start import quiet_interrupt_while_loading
+
+quiet_interrupt_while_loading()
+
 from .errors import (GeometryError, LandmarkError, MeshSetError, ParameterError, SymblendError,
                      SymblendWarning, SymmetryNotFoundError)
 from .meshset_filter import (ASYMMETRY_ATTRIBUTE, DISPLAY_NAME, FILTER_NAME, bind_to_meshset,

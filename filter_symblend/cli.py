@@ -9,7 +9,7 @@ before and after, check and convert landmarks.
     symblend landmarks convert IN OUT
 
 The filter options are generated from the filter's parameter declaration.
-Errors are one line on stderr, exit status 1; no output file is written then.
+Errors are one line on stderr and nothing is written; exit status 1 bad input, 2 usage, 130 interrupted.
 """
 
 from __future__ import annotations
@@ -18,9 +18,11 @@ import argparse
 import json
 import os
 import pathlib
+import signal
 import sys
 import warnings
 
+from .command_files import MESH_SAVE_FORMATS, check_loaded_mesh, check_output_path
 from .errors import SymblendError, SymblendWarning
 from .parameters import DEFAULTS, PARAMETERS
 
@@ -28,23 +30,23 @@ FRAMES = ("LPS", "RAS")
 
 
 def _add_filter_options(parser: argparse.ArgumentParser) -> None:
-    group = parser.add_argument_group("filter options (MeshSet.generate_symmetrized_mesh)")
+    group = parser.add_argument_group("filter options (MeshSet.generate_symmetrized_mesh; docs: README, parameter table)")
     for p in PARAMETERS:
-        unit = f" Unit: {p.unit}." if p.unit else ""
-        text = f"{p.label}. {p.doc}{unit} Valid: {p.range_text()}.".replace("%", "%%")  # argparse formats help
-        options = {"dest": p.name, "default": p.default, "metavar": p.name.upper(),
-                   "help": text + " Default: %(default)s."}
+        unit = f", {p.unit}" if p.unit else ""
+        options = {"dest": p.name, "default": p.default,
+                   "help": f"{p.label}{unit}; valid {p.range_text()}".replace("%", "%%") + "; default %(default)s"}
         if p.kind == "enum":
             options["choices"] = p.choices
-        elif p.kind in ("int", "float"):
-            options["type"] = int if p.kind == "int" else float
+        else:
+            options["metavar"] = {"int": "N", "float": "X", "string": "NAME"}[p.kind]
+            if p.kind in ("int", "float"):
+                options["type"] = int if p.kind == "int" else float
         group.add_argument("--" + p.name.replace("_", "-"), **options)
 
 
-def _add_landmark_options(parser: argparse.ArgumentParser, required: bool = True) -> None:
+def _add_landmark_options(parser: argparse.ArgumentParser, required: bool = True, note: str = "") -> None:
     parser.add_argument("-l", "--landmarks", required=required, type=pathlib.Path,
-                        help="landmark file: .pp, .fcsv, .mrk.json, .pts or .csv"
-                             + ("" if required else " (not with --pairs auto)"))
+                        help="landmark file: .pp, .fcsv, .mrk.json, .pts or .csv" + note)
     parser.add_argument("--pair-table", type=pathlib.Path,
                         help="pair table: two-column CSV of landmark names or 1-based numbers (left, right); "
                              "default: pair by name (L_/R_ prefixes, _left/_right suffixes, any case)")
@@ -65,6 +67,9 @@ def _add_landmark_options(parser: argparse.ArgumentParser, required: bool = True
     parser.add_argument("--mesh-frame", choices=FRAMES, default="LPS",
                         help="coordinate system of the mesh, used only when the landmark file states one "
                              "(Slicer files); default: %(default)s, as Slicer saves models")
+    parser.add_argument("--allow-far-landmarks", action="store_true",
+                        help="snap landmarks that lie farther than 2%% of the diagonal from the surface "
+                             "(without it they are an error: a wrong coordinate system or unit is likelier)")
 
 
 def _positive_length(text: str) -> float:
@@ -100,6 +105,7 @@ def _load_mesh(path: pathlib.Path, ms=None):
         load_mesh_with_attributes(ms, path)
     except pymeshlab.PyMeshLabException as error:
         raise SymblendError(f"{path}: pymeshlab cannot read it ({_one_line(error)}).") from None
+    check_loaded_mesh(path, ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix())
     return ms
 
 
@@ -127,16 +133,23 @@ def _snapped_pairs(ms, args):
         unpaired = [singles[i] for i in unpaired]
     mesh = ms.current_mesh()
     snapped = snap_pairs(mesh.vertex_matrix(), landmarks, index_pairs, unpaired,
-                         midline=args.midline, source=str(args.landmarks))
+                         midline=args.midline, source=str(args.landmarks), allow_far=args.allow_far_landmarks)
     snapped = add_curve_pairs(snapped, mesh.vertex_matrix(), mesh.face_matrix(), landmarks, curves,
-                              args.curve_spacing, str(args.landmarks))
+                              args.curve_spacing, str(args.landmarks), allow_far=args.allow_far_landmarks)
     return snapped, frame_note
 
 
-def _require_folder(output: pathlib.Path) -> None:
-    """Fail before any work when the output's folder is missing."""
-    if not output.parent.is_dir():
-        raise SymblendError(f"{output}: the folder {output.parent} does not exist; create it first.")
+def _check_outputs(args, outputs: dict[str, pathlib.Path | None], inputs: list[pathlib.Path]) -> None:
+    """Every output path of the command (``{what: path or None}``) checked before any work (see
+    :func:`check_output_path`); two outputs may not share a file."""
+    overwrite = getattr(args, "overwrite", False)
+    given = {what: path for what, path in outputs.items() if path is not None}
+    for what, path in given.items():
+        check_output_path(path, inputs, overwrite, what, MESH_SAVE_FORMATS if what == "output mesh" else None)
+    resolved = [path.resolve() for path in given.values()]
+    for index, path in enumerate(resolved):
+        if path in resolved[:index]:
+            raise SymblendError(f"{list(given.values())[index]}: given for two outputs; give each its own file.")
 
 
 def _save_atomically(ms, output: pathlib.Path) -> None:
@@ -187,8 +200,14 @@ def _write_landmarks(ms, args, names: dict) -> dict:
 
 
 def _write_report(path, report) -> None:
+    """Write ``report`` as JSON to ``path`` (if given) under a temporary name, then rename it."""
     if path:
-        path.write_text(json.dumps(report, indent=2, default=_jsonable) + "\n")
+        temporary = path.with_name(f".{path.name}.symblend-partial")
+        try:
+            temporary.write_text(json.dumps(report, indent=2, default=_jsonable) + "\n")
+            os.replace(temporary, path)
+        finally:
+            temporary.unlink(missing_ok=True)
 
 
 def _jsonable(value):
@@ -211,7 +230,7 @@ def _symmetrize(args) -> int:
                             "--pairs landmarks+auto.")
     if not automatic and not args.landmarks:
         raise SymblendError("Give a landmark file (-l LANDMARKS), or --pairs auto to find pairs on the surface.")
-    _require_folder(args.output)
+    _check_outputs(args, {"output mesh": args.output, "report": args.report}, [args.input, args.landmarks])
     ms = _load_mesh(args.input)
     landmarks = None if automatic else _write_landmarks(ms, args, params)
     if landmarks and landmarks["curves"] and not params["width_spacing"]:
@@ -244,8 +263,13 @@ def _mlx(args) -> int:
     from .mlx import read_filter_script, symblend_options
     from .script_runner import apply_filter_script
 
-    _require_folder(args.output)
+    _check_outputs(args, {"output mesh": args.output, "report": args.report},
+                   [args.input, args.script, args.landmarks])
     ours = [symblend_options(node, args.script) for node in read_filter_script(args.script) if node.is_symblend]
+    needs_landmarks = [options for options in ours if options["pairs"] != "auto"]
+    if needs_landmarks and not args.landmarks:
+        raise SymblendError(f"{args.script} runs the filter with pairs='{needs_landmarks[0]['pairs']}'; give the "
+                            "landmark file with -l LANDMARKS (or use a script whose pairs are 'auto').")
     ms = _load_mesh(args.input)
     landmarks = None
     if args.landmarks:
@@ -266,6 +290,7 @@ def _report(args) -> int:
     from .comparison import compare_layers
     from .surface_symmetry import CHECK_SAMPLES
 
+    _check_outputs(args, {"picture": args.png, "JSON report": args.json}, [args.before, args.after])
     ms = _load_mesh(args.before)
     before_id = ms.current_mesh_id()
     after_id = _load_mesh(args.after, ms).current_mesh_id()
@@ -317,20 +342,36 @@ def _check(args) -> int:
 def _convert(args) -> int:
     from .landmark_files import read_landmarks, write_landmarks
 
+    _check_outputs(args, {"landmark file": args.output}, [args.input])
     write_landmarks(args.output, read_landmarks(args.input))
     print(f"{args.input} -> {args.output}")
     return 0
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with a one-line usage error (exit status 2) that points to ``--help``."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see: {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="symblend", description=__doc__.split("\n\n")[0])
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        installed = version("filter-symblend")
+    except PackageNotFoundError:
+        installed = "unknown (not installed)"
+    parser = _Parser(prog="symblend", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--version", action="version", version=f"symblend (filter-symblend) {installed}")
     commands = parser.add_subparsers(dest="command", required=True)
     run = commands.add_parser("symmetrize", help="symmetrize a mesh from landmark pairs or automatic pairs")
     run.add_argument("input", type=pathlib.Path, help="mesh file (any format pymeshlab reads)")
-    _add_landmark_options(run, required=False)
+    _add_landmark_options(run, required=False, note=" (not with --pairs auto)")
     run.add_argument("-o", "--output", required=True, type=pathlib.Path,
                      help="output mesh; .ply keeps quality (local asymmetry) and the attributes")
     run.add_argument("--report", type=pathlib.Path, help="write the filter's report as JSON")
+    run.add_argument("--overwrite", action="store_true", help="allow -o to name the input mesh (replaced at the end)")
     _add_missing_option(run)
     _add_filter_options(run)
     run.set_defaults(handler=_symmetrize)
@@ -338,11 +379,12 @@ def build_parser() -> argparse.ArgumentParser:
     script = commands.add_parser("mlx", help="run a MeshLab filter script (.mlx) that may use our filter")
     script.add_argument("script", type=pathlib.Path, help="filter script (.mlx), e.g. one of mlx_presets/")
     script.add_argument("input", type=pathlib.Path, help="mesh file (any format pymeshlab reads)")
-    _add_landmark_options(script, required=False)
+    _add_landmark_options(script, required=False, note=" (for scripts whose filter uses landmarks)")
     _add_missing_option(script)
     script.add_argument("-o", "--output", required=True, type=pathlib.Path,
                         help="the current mesh after the script; .ply keeps quality and the attributes")
     script.add_argument("--report", type=pathlib.Path, help="write every filter's output as JSON")
+    script.add_argument("--overwrite", action="store_true", help="allow -o to name the input mesh (replaced at the end)")
     script.set_defaults(handler=_mlx)
 
     report = commands.add_parser("report", help="before/after check: Hausdorff and mirror asymmetry")
@@ -369,12 +411,21 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _show_warning(message, category, *rest) -> None:
+    print(f"symblend: warning: {_one_line(message)}", file=sys.stderr)
+
+
 def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+    """Exit status: 0 done, 1 bad input (one line on stderr, nothing written), 2 usage, 130 interrupted."""
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # start-up is over: Ctrl-C is KeyboardInterrupt
     try:
+        args = build_parser().parse_args(argv)
         with warnings.catch_warnings():
-            warnings.simplefilter("always")
-            warnings.showwarning = lambda message, *rest: print(f"symblend: warning: {message}", file=sys.stderr)
+            # numpy/scipy warnings are expected where results are checked (the core raises on any
+            # non-finite output); ours name a cause and a fix.
+            warnings.simplefilter("ignore")
+            warnings.simplefilter("always", SymblendWarning)
+            warnings.showwarning = _show_warning
             return args.handler(args)
     except SymblendError as error:
         print(f"symblend: error: {_one_line(error)}", file=sys.stderr)

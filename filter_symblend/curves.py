@@ -64,8 +64,8 @@ def find_curves(names: list[str], left_words=LEFT_WORDS, right_words=RIGHT_WORDS
 
 
 def add_curve_pairs(snapped: SnappedPairs, points: np.ndarray, faces: np.ndarray, landmarks: LandmarkSet,
-                    curves: list[NamedCurve], spacing: float | None = None, source: str = "landmarks"
-                    ) -> SnappedPairs:
+                    curves: list[NamedCurve], spacing: float | None = None, source: str = "landmarks",
+                    allow_far: bool = False) -> SnappedPairs:
     """``snapped`` with every curve resampled about ``spacing`` apart (mesh units; default 1 % of
     the diagonal) into pairs (or midline landmarks), after its single landmarks.
 
@@ -97,7 +97,7 @@ def add_curve_pairs(snapped: SnappedPairs, points: np.ndarray, faces: np.ndarray
             continue
         control_names = [[names[i] for i in side] for side in controls]
         positions = [np.array([landmarks.landmarks[i].position for i in side], dtype=float) for side in controls]
-        vertices = [nearest_vertices(points, where, side_names, source)[1]
+        vertices = [nearest_vertices(points, where, side_names, source, allow_far)[1]
                     for where, side_names in zip(positions, control_names)]
         placed_vertices.update(np.concatenate(vertices).tolist())
         resampled = resample_curve(graph, points, vertices[0], vertices[1] if len(sides) == 2 else None, spacing,

@@ -110,6 +110,11 @@ def _read_fcsv(text: str, path: str) -> LandmarkSet:
                                             "LPS or RAS; export the points in LPS or RAS from Slicer.")
             elif key == "columns":
                 columns = [c.strip() for c in value.split(",")]
+                absent = [axis for axis in "xyz" if axis not in columns]
+                if absent:
+                    raise LandmarkFileError(f"{path}, line {number}: the columns header has no "
+                                            f"{', '.join(absent)} column; export the markups again from Slicer "
+                                            "(3D points need x, y and z).")
             continue
         names = columns or ["id", "x", "y", "z", "ow", "ox", "oy", "oz", "vis", "sel", "lock", "label"]
         record = dict(zip(names, row))

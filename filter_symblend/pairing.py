@@ -89,17 +89,21 @@ def read_pair_table(path, names: list[str]):
     return pairs
 
 
-def nearest_vertices(points: np.ndarray, positions: np.ndarray, names: list[str], source: str):
+def nearest_vertices(points: np.ndarray, positions: np.ndarray, names: list[str], source: str,
+                     allow_far: bool = False):
     """Distances and indices (k,) of the vertices of ``points`` (N, 3) nearest to ``positions``
-    (k, 3), with a warning that names the points farther than FAR_FROM_SURFACE from the surface."""
+    (k, 3). Points farther than FAR_FROM_SURFACE from the surface are an error that names them
+    (a wrong coordinate system or unit is likelier than such a landmark), a warning with ``allow_far``."""
     distances, vertices = cKDTree(points).query(positions)
     diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
     far = np.flatnonzero(distances > FAR_FROM_SURFACE * diagonal)
     if far.size:
         shown = ", ".join(f"{names[i]} ({distances[i]:.3g})" for i in far[:10])
-        warnings.warn(f"{source}: {shown} lie far from the mesh surface (more than "
-                      f"{FAR_FROM_SURFACE:.0%} of the diagonal); check the file's coordinate system "
-                      "(--mesh-frame) and units.", SymblendWarning, stacklevel=3)
+        message = (f"{source}: {shown} lie far from the mesh surface (more than {FAR_FROM_SURFACE:.0%} of the "
+                   "diagonal); check the file's coordinate system (--mesh-frame) and units")
+        if not allow_far:
+            raise LandmarkError(f"{message}, or snap them anyway with --allow-far-landmarks (allow_far=True).")
+        warnings.warn(f"{message}.", SymblendWarning, stacklevel=3)
     return distances, vertices
 
 
@@ -127,8 +131,9 @@ class SnappedPairs:
 
 
 def snap_pairs(points: np.ndarray, landmarks: LandmarkSet, index_pairs, unpaired: list[int],
-               midline: bool = False, source: str = "landmarks") -> SnappedPairs:
-    """Snap every placed landmark to its nearest vertex of ``points`` (N, 3).
+               midline: bool = False, source: str = "landmarks", allow_far: bool = False) -> SnappedPairs:
+    """Snap every placed landmark to its nearest vertex of ``points`` (N, 3) (far from the surface: an
+    error unless ``allow_far``, see :func:`nearest_vertices`).
 
     Pairs with an unplaced side are left out (and listed). Unpaired landmarks are
     midline landmarks when ``midline`` is true, an error that lists them otherwise.
@@ -152,7 +157,7 @@ def snap_pairs(points: np.ndarray, landmarks: LandmarkSet, index_pairs, unpaired
                       "are left out.", SymblendWarning, stacklevel=2)
     order = [i for pair in placed for i in pair] + on_plane
     positions = np.array([landmarks.landmarks[i].position for i in order], dtype=float).reshape(-1, 3)
-    distances, vertices = nearest_vertices(points, positions, [names[i] for i in order], source)
+    distances, vertices = nearest_vertices(points, positions, [names[i] for i in order], source, allow_far)
     sorted_at = np.argsort(vertices, kind="stable")
     same = np.flatnonzero(np.diff(vertices[sorted_at]) == 0)
     if same.size:

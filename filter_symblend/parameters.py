@@ -84,7 +84,8 @@ class Parameter:
         if self.kind == "int":
             return f"{self.minimum:d}..{self.maximum:d}"
         left = "(" if self.minimum_open else "["
-        return f"{left}{self.minimum:g}, {self.maximum:g}]"
+        right = ")" if math.isinf(self.maximum) else "]"  # numbers are finite: inf itself is not valid
+        return f"{left}{self.minimum:g}, {self.maximum:g}{right}"
 
 
 PARAMETERS: tuple[Parameter, ...] = (

@@ -2,6 +2,7 @@
 
 import json
 import pathlib
+import re
 import subprocess
 import sys
 
@@ -93,13 +94,23 @@ def test_pair_table_option(tmp_path, bent_cow_files, capsys):
     assert "80 pairs" in capsys.readouterr().out
 
 
-def test_help_lists_every_parameter_with_default(capsys):
-    with pytest.raises(SystemExit):
+def test_help_lists_every_parameter_with_its_choices_default_and_unit(capsys):
+    with pytest.raises(SystemExit) as exit:
         main(["symmetrize", "--help"])
+    assert exit.value.code == 0
     text = " ".join(capsys.readouterr().out.split())
     for p in PARAMETERS:
-        assert f"--{p.name.replace('_', '-')}" in text
-        assert f"Default: {p.default}" in text
+        option = f"--{p.name.replace('_', '-')}"
+        shown = f"{option} {{{','.join(p.choices)}}}" if p.kind == "enum" else option
+        assert shown in text and f"default {p.default}" in text and p.unit in text
+    assert "--mode {standard,affine,articulated}" in text and "--pairs {landmarks,auto,landmarks+auto}" in text
+    assert len(text) < 6000  # the long explanations are in the docs
+
+
+def test_version(capsys):
+    with pytest.raises(SystemExit) as exit:
+        main(["--version"])
+    assert exit.value.code == 0 and capsys.readouterr().out.startswith("symblend (filter-symblend) ")
 
 
 def test_real_process(tmp_path, bent_cow_files):
@@ -199,13 +210,127 @@ def test_unreadable_ply_properties(tmp_path, header, pattern):
         read_ply_vertex_properties(path)
 
 
-def test_an_output_format_pymeshlab_cannot_write(tmp_path, bent_cow_files, capsys):
+def _damaged_obj(path: pathlib.Path, damage: str) -> pathlib.Path:
+    """A small closed OBJ (a tetrahedron) with a vertex 'nan nan nan' or a face that refers to a missing vertex."""
+    vertices = ["v 0 0 0", "v 1 0 0", "v 0 1 0", "v 0 0 1"]
+    faces = ["f 1 3 2", "f 1 2 4", "f 2 3 4", "f 1 4 3"]
+    if damage == "nan":
+        vertices.insert(1, "v nan nan nan")
+        faces = [" ".join(["f"] + [str(int(i) + (int(i) > 1)) for i in face.split()[1:]]) for face in faces]
+    else:
+        faces.append("f 1 2 99")
+    path.write_text("\n".join(vertices + faces) + "\n")
+    return path
+
+
+def _probe_arguments(tmp_path, mesh_path, landmark_path):
+    """(name, arguments, the one-line error expected): bad outputs and damaged meshes, each refused before
+    any computation."""
+    folder = tmp_path / "missing"
+    return [
+        ("output is the input", ["-o", str(mesh_path)], r"cow_bent.obj: is the input file; .*--overwrite"),
+        ("output is a folder", ["-o", str(tmp_path)], r"is a folder; give the output mesh a file name"),
+        ("no extension", ["-o", str(tmp_path / "out")], r"out: no extension; the output mesh needs one pymeshlab "
+                                                          r"writes: .*\.ply"),
+        ("unknown extension", ["-o", str(tmp_path / "out.xyzzy")], r"out.xyzzy: the extension '.xyzzy'"),
+        ("missing folder", ["-o", str(folder / "out.ply")], r"the folder .*missing does not exist; create it first"),
+        ("report in a missing folder", ["-o", str(tmp_path / "out.ply"), "--report", str(folder / "r.json")],
+         r"r.json: the folder .*missing does not exist"),
+        ("report over the output", ["-o", str(tmp_path / "out.ply"), "--report", str(tmp_path / "out.ply")],
+         r"out.ply: given for two outputs"),
+        ("nan vertex", ["-o", str(tmp_path / "out.ply"), "INPUT", str(_damaged_obj(tmp_path / "nan.obj", "nan"))],
+         r"nan.obj: the file declares 5 vertices and 4 could be read .*renumbered"),
+        ("missing vertex", ["-o", str(tmp_path / "out.ply"), "INPUT",
+                            str(_damaged_obj(tmp_path / "hole.obj", "missing"))],
+         r"hole.obj: the file declares 5 faces and only 4 could be read .*missing vertices"),
+    ]
+
+
+def test_bad_outputs_and_damaged_meshes_are_refused_before_any_work(tmp_path, bent_cow_files, capsys, monkeypatch):
+    import hashlib
+
+    import filter_symblend.meshset_filter as meshset_filter
+
     mesh_path, landmark_path, *_ = bent_cow_files
-    output = tmp_path / "out.xyzzy"
-    assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "-o", str(output)]) == 1
+
+    def never(*args, **kwargs):
+        raise AssertionError("the filter ran")
+
+    monkeypatch.setattr(meshset_filter, "generate_symmetrized_mesh", never)
+    digest = hashlib.sha256(mesh_path.read_bytes()).hexdigest()
+    before = set(tmp_path.rglob("*"))
+    for name, arguments, expected in _probe_arguments(tmp_path, mesh_path, landmark_path):
+        source = mesh_path
+        if "INPUT" in arguments:
+            source = pathlib.Path(arguments[arguments.index("INPUT") + 1])
+            arguments = arguments[:arguments.index("INPUT")]
+        before |= {source}
+        assert main(["symmetrize", str(source), "-l", str(landmark_path), *arguments]) == 1, name
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and re.search(expected, err), (name, err)
+    assert set(tmp_path.rglob("*")) == before  # nothing written, no partial file
+    assert hashlib.sha256(mesh_path.read_bytes()).hexdigest() == digest
+
+
+def test_overwrite_replaces_the_input_only_when_asked_and_at_the_end(tmp_path, bent_cow_files, capsys):
+    mesh_path, landmark_path, deformed, left, right = bent_cow_files
+    output = mesh_path
+    assert main(["symmetrize", str(output), "-l", str(landmark_path), "-o", str(output), "--overwrite"]) == 0
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(output))
+    points = ms.current_mesh().vertex_matrix()
+    assert points.shape == deformed.shape and np.abs(points - deformed).max() > 1e-3  # symmetrized in place
+
+
+def test_usage_errors_are_one_line_with_status_2(capsys):
+    for arguments in (["symmetrize"], ["symmetrize", "a.obj", "-o", "b.ply", "--mode", "stretchy"], ["nonsense"]):
+        with pytest.raises(SystemExit) as exit:
+            main(arguments)
+        err = capsys.readouterr().err
+        assert exit.value.code == 2 and err.count("\n") == 1 and "--help" in err, err
+    with pytest.raises(SystemExit):
+        main(["symmetrize", "a.obj", "-o", "b.ply", "--mode", "stretchy"])
+    assert "invalid choice: 'stretchy' (choose from 'standard', 'affine', 'articulated')" in capsys.readouterr().err
+
+
+def test_every_mesh_format_listed_is_one_pymeshlab_writes(tmp_path):
+    from filter_symblend.command_files import MESH_SAVE_FORMATS
+    ms = pymeshlab.MeshSet()
+    ms.create_sphere(subdiv=1)
+    for extension in MESH_SAVE_FORMATS:
+        ms.save_current_mesh(str(tmp_path / f"sphere.{extension}"))
+        assert (tmp_path / f"sphere.{extension}").exists(), extension
+
+
+def test_ctrl_c_while_loading_exits_130_with_one_line():
+    code = ("import os, signal, sys, time; sys.argv[0] = 'symblend'; "
+            "from filter_symblend.command_start import quiet_interrupt_while_loading; "
+            "quiet_interrupt_while_loading(); os.kill(os.getpid(), signal.SIGINT); time.sleep(5)")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 130 and done.stderr == "symblend: interrupted; no output written\n"
+
+
+def test_far_landmarks_are_an_error_unless_allowed(tmp_path, bent_cow_files, capsys):
+    mesh_path, landmark_path, deformed, left, right = bent_cow_files
+    landmarks = read_landmarks(landmark_path)
+    moved = [Landmark(m.name, tuple(np.add(m.position, [0, 0, 0.5])) if m.name == "L_3" else m.position)
+             for m in landmarks.landmarks]
+    far = tmp_path / "far.pp"
+    write_landmarks(far, LandmarkSet(moved))
+    output = tmp_path / "out.ply"
+    assert main(["symmetrize", str(mesh_path), "-l", str(far), "-o", str(output)]) == 1
     err = capsys.readouterr().err
-    assert "out.xyzzy: pymeshlab cannot write it (Unknown format for save: xyzzy)" in err and err.count("\n") == 1
-    assert not list(tmp_path.glob("*xyzzy*")) and not list(tmp_path.glob(".*partial*"))
+    assert "L_3 (" in err and "--allow-far-landmarks" in err and not output.exists()
+    assert main(["symmetrize", str(mesh_path), "-l", str(far), "-o", str(output), "--allow-far-landmarks"]) == 0
+    assert "warning: " in capsys.readouterr().err and output.exists()
+
+
+def test_a_landmark_script_without_a_landmark_file_says_to_give_one(tmp_path, bent_cow_files, capsys):
+    mesh_path, *_ = bent_cow_files
+    preset = pathlib.Path(__file__).resolve().parents[1] / "mlx_presets" / "fossil_restoration.mlx"
+    assert main(["mlx", str(preset), str(mesh_path), "-o", str(tmp_path / "out.ply")]) == 1
+    err = capsys.readouterr().err
+    assert "give the landmark file with -l LANDMARKS" in err and err.count("\n") == 1
 
 
 def test_symmetrize_with_automatic_pairs_needs_no_landmark_file(tmp_path, cow, capsys):

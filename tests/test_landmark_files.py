@@ -125,3 +125,11 @@ def test_more_malformed_files(tmp_path, name, text, pattern):
     path.write_text(text)
     with pytest.raises(LandmarkFileError, match=pattern):
         read_landmarks(path)
+
+
+def test_an_fcsv_without_a_z_column_says_so(tmp_path):
+    path = tmp_path / "no_z.fcsv"
+    path.write_text("# Markups fiducial file version = 4.11\n# CoordinateSystem = LPS\n"
+                    "# columns = id,x,y,ow,ox,oy,oz,vis,sel,lock,label\nvtkMRML_1,1,2,0,0,0,1,1,1,0,L_a\n")
+    with pytest.raises(LandmarkFileError, match=r"no_z.fcsv, line 3: the columns header has no z column"):
+        read_landmarks(path)

@@ -67,8 +67,11 @@ def test_snapping_errors_and_warnings():
     with pytest.raises(LandmarkError, match=r"1 landmark\(s\) have no partner: 'nasion'.*\(--midline\)"):
         snap_pairs(points, LandmarkSet([Landmark("nasion", (0, 0, 0))]), [], [0])
     far = LandmarkSet([Landmark("L_a", (1.0, 0.0, -5.0)), Landmark("R_a", (-1.0, 0.0, 0.0))])
-    with pytest.warns(SymblendWarning, match=r"L_a \(5\) lie far from the mesh surface.*--mesh-frame"):
+    with pytest.raises(LandmarkError, match=r"L_a \(5\) lie far from the mesh surface.*--mesh-frame.*"
+                                             r"--allow-far-landmarks"):
         snap_pairs(points, far, [(0, 1)], [])
+    with pytest.warns(SymblendWarning, match=r"L_a \(5\) lie far from the mesh surface.*--mesh-frame"):
+        snap_pairs(points, far, [(0, 1)], [], allow_far=True)
 
 
 def test_unpaired_landmarks_become_midline_landmarks_when_asked():
