@@ -7,7 +7,7 @@ import pymeshlab
 
 from .asymmetry import MirrorFit, fit_mirror_plane
 from .attributes import optional_attribute
-from .hausdorff import two_way_hausdorff
+from .hausdorff import two_way_distance
 from .landmarks import pairs_from_attribute
 from .parameters import DEFAULTS
 from .surface_symmetry import CHECK_SAMPLES, fit_surface_mirror_plane, mirror_asymmetry, refine_mirror_plane
@@ -32,7 +32,8 @@ def compare_layers(ms: pymeshlab.MeshSet, before: int, after: int,
     all) and holds their distances as ``per_vertex``. Each plane is refined from
     the layer's landmark pairs (``pair_attribute``) when it carries them; otherwise the first layer's
     is fitted and the second's refined from it. The layers are not changed."""
-    result = {"hausdorff_before_after": two_way_hausdorff(ms, before, after)}
+    result = {"hausdorff_before_after": two_way_distance(ms.mesh(before).vertex_matrix(), ms.mesh(before).face_matrix(),
+                                                         ms.mesh(after).vertex_matrix(), ms.mesh(after).face_matrix())}
     plane = None
     for key, mesh_id in (("mirror_asymmetry_before", before), ("mirror_asymmetry_after", after)):
         mesh = ms.mesh(mesh_id)
