@@ -12,19 +12,20 @@ quiet_interrupt_while_loading()
 
 from .errors import (GeometryError, LandmarkError, MeshSetError, ParameterError, SymblendError,
                      SymblendWarning, SymmetryNotFoundError)
-from .meshset_filter import (ASYMMETRY_ATTRIBUTE, DISPLAY_NAME, FILTER_NAME, bind_to_meshset,
+from .meshlab.meshset_filter import (ASYMMETRY_ATTRIBUTE, DISPLAY_NAME, FILTER_NAME, bind_to_meshset,
                              generate_symmetrized_mesh)
-from .mlx import ScriptError
+from .meshlab.mlx import ScriptError
+from .landmarks.from_file import pairs_from_landmark_file
 from .parameters import PARAMETERS
-from .script_runner import apply_filter_script, save_filter_script
+from .meshlab.script_runner import apply_filter_script, save_filter_script
 from .pipeline import symmetrize
-from .symmetrize import SymmetrizationResult
+from .core.symmetrize import SymmetrizationResult
 
 bind_to_meshset()
 
 __all__ = [
     "ASYMMETRY_ATTRIBUTE", "DISPLAY_NAME", "FILTER_NAME", "PARAMETERS", "GeometryError",
     "LandmarkError", "MeshSetError", "ParameterError", "ScriptError", "SymblendError", "SymblendWarning",
-    "SymmetrizationResult", "SymmetryNotFoundError", "apply_filter_script", "generate_symmetrized_mesh", "save_filter_script",
-    "symmetrize",
+    "SymmetrizationResult", "SymmetryNotFoundError", "apply_filter_script", "generate_symmetrized_mesh",
+    "pairs_from_landmark_file", "save_filter_script", "symmetrize",
 ]

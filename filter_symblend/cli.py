@@ -98,7 +98,7 @@ def _load_mesh(path: pathlib.Path, ms=None):
 
     if not path.is_file():
         raise SymblendError(f"{path}: no such mesh file.")
-    from .ply_attributes import load_mesh_with_attributes
+    from .meshlab.ply_attributes import load_mesh_with_attributes
 
     ms = pymeshlab.MeshSet() if ms is None else ms
     try:
@@ -110,33 +110,17 @@ def _load_mesh(path: pathlib.Path, ms=None):
 
 
 def _snapped_pairs(ms, args):
-    from .curves import add_curve_pairs, find_curves
-    from .landmark_files import read_landmarks
-    from .pairing import pair_by_name, read_pair_table, snap_pairs
+    from .landmarks.from_file import pairs_from_landmark_file
 
-    if args.curve_spacing and not args.curves:
-        raise SymblendError("--curve-spacing spaces the semilandmarks of curves; add --curves, or leave it out.")
-    landmarks, frame_note = read_landmarks(args.landmarks).in_frame(args.mesh_frame)
-    names = landmarks.names()
     left_words, _, right_words = args.side_words.lower().partition("/")
     if not left_words or not right_words:
         raise SymblendError(f"--side-words {args.side_words!r}: give LEFT,.../RIGHT,..., e.g. l,left/r,right.")
-    side_words = tuple(left_words.split(",")), tuple(right_words.split(","))
-    curves, singles = find_curves(names, *side_words, args.midline) if args.curves else ([], range(len(names)))
-    if args.pair_table:
-        index_pairs = read_pair_table(args.pair_table, names)
-        paired = {i for pair in index_pairs for i in pair}
-        unpaired = [i for i in singles if i not in paired]
-    else:
-        index_pairs, unpaired = pair_by_name([names[i] for i in singles], *side_words)
-        index_pairs = [(singles[a], singles[b]) for a, b in index_pairs]
-        unpaired = [singles[i] for i in unpaired]
     mesh = ms.current_mesh()
-    snapped = snap_pairs(mesh.vertex_matrix(), landmarks, index_pairs, unpaired,
-                         midline=args.midline, source=str(args.landmarks), allow_far=args.allow_far_landmarks)
-    snapped = add_curve_pairs(snapped, mesh.vertex_matrix(), mesh.face_matrix(), landmarks, curves,
-                              args.curve_spacing, str(args.landmarks), allow_far=args.allow_far_landmarks)
-    return snapped, frame_note
+    snapped = pairs_from_landmark_file(
+        mesh.vertex_matrix(), mesh.face_matrix(), args.landmarks, args.pair_table,
+        (tuple(left_words.split(",")), tuple(right_words.split(","))), args.midline, args.curves,
+        args.curve_spacing, args.mesh_frame, args.allow_far_landmarks)
+    return snapped
 
 
 def _check_outputs(args, outputs: dict[str, pathlib.Path | None], inputs: list[pathlib.Path]) -> None:
@@ -157,7 +141,7 @@ def _save_atomically(ms, output: pathlib.Path) -> None:
     quality and every custom per-vertex scalar attribute."""
     import pymeshlab
 
-    from .attributes import custom_attribute_names
+    from .meshlab.attributes import custom_attribute_names
 
     temporary = output.with_name(f".{output.stem}.symblend-partial{output.suffix}")
     options = {}
@@ -186,14 +170,14 @@ def _progress_display():
 
 def _write_landmarks(ms, args, names: dict) -> dict:
     """Snap the landmark file onto the current mesh and store it as the attributes ``names``."""
-    from .attributes import write_landmark_attributes
+    from .meshlab.attributes import write_landmark_attributes
 
-    snapped, frame_note = _snapped_pairs(ms, args)
+    snapped = _snapped_pairs(ms, args)
     missing = [name.strip() for name in args.missing.split(",") if name.strip()]
     left_weights, right_weights = snapped.weights(missing) if missing else (None, None)
     write_landmark_attributes(ms.current_mesh(), snapped.pairs, left_weights, right_weights, names["pair_attribute"],
                               names["midline_attribute"], names["weight_attribute"])
-    return {"file": str(args.landmarks), "frame": frame_note, "pairs": [list(p) for p in snapped.pair_names],
+    return {"file": str(args.landmarks), "frame": snapped.frame_note, "pairs": [list(p) for p in snapped.pair_names],
             "midline": snapped.midline_names, "curves": snapped.curves,
             "placed_point_spacing": snapped.placed_spacing, "missing": missing,
             "snap_distance_max": float(snapped.snap_distances.max()), "left_out_unplaced": snapped.unplaced}
@@ -221,7 +205,7 @@ def _jsonable(value):
 
 
 def _symmetrize(args) -> int:
-    from .meshset_filter import generate_symmetrized_mesh
+    from .meshlab.meshset_filter import generate_symmetrized_mesh
 
     params = {p.name: getattr(args, p.name) for p in PARAMETERS}
     automatic = params["pairs"] == "auto"
@@ -260,8 +244,8 @@ def _symmetrize(args) -> int:
 
 
 def _mlx(args) -> int:
-    from .mlx import read_filter_script, symblend_options
-    from .script_runner import apply_filter_script
+    from .meshlab.mlx import read_filter_script, symblend_options
+    from .meshlab.script_runner import apply_filter_script
 
     _check_outputs(args, {"output mesh": args.output, "report": args.report},
                    [args.input, args.script, args.landmarks])
@@ -287,8 +271,8 @@ def _mlx(args) -> int:
 
 
 def _report(args) -> int:
-    from .comparison import compare_layers
-    from .surface_symmetry import CHECK_SAMPLES
+    from .checks.comparison import compare_layers
+    from .checks.surface_asymmetry import CHECK_SAMPLES
 
     _check_outputs(args, {"picture": args.png, "JSON report": args.json}, [args.before, args.after])
     ms = _load_mesh(args.before)
@@ -304,7 +288,7 @@ def _report(args) -> int:
         m = result[key]
         print(f"{label:24}{m['max']:12.5g}{m['mean']:12.5g}{m['rms']:12.5g}")
     if args.png:
-        from .render import render_comparison
+        from .checks.render import render_comparison
 
         meshes = [dict(result[key], points=ms.mesh(mesh_id).vertex_matrix(), faces=ms.mesh(mesh_id).face_matrix())
                   for key, mesh_id in (("mirror_asymmetry_before", before_id), ("mirror_asymmetry_after", after_id))]
@@ -315,11 +299,11 @@ def _report(args) -> int:
 
 
 def _check(args) -> int:
-    from .landmarks import check_pairs
+    from .core.landmark_pairs import check_pairs
 
     ms = _load_mesh(args.input)
-    snapped, frame_note = _snapped_pairs(ms, args)
-    print(f"{args.landmarks}: {frame_note}; {len(snapped.pair_names)} pairs, "
+    snapped = _snapped_pairs(ms, args)
+    print(f"{args.landmarks}: {snapped.frame_note}; {len(snapped.pair_names)} pairs, "
           f"{len(snapped.midline_names)} midline")
     for k, ((left, right), distance) in enumerate(zip(snapped.pair_names, snapped.snap_distances), start=1):
         print(f"  {k:3d}  {left} -> vertex {snapped.pairs.left[k - 1]} (snap {distance[0]:.3g})   "
@@ -340,7 +324,7 @@ def _check(args) -> int:
 
 
 def _convert(args) -> int:
-    from .landmark_files import read_landmarks, write_landmarks
+    from .landmarks.files import read_landmarks, write_landmarks
 
     _check_outputs(args, {"landmark file": args.output}, [args.input])
     write_landmarks(args.output, read_landmarks(args.input))

@@ -2,15 +2,17 @@
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 
 import numpy as np
 
 from .auto import DEFAULT, symmetrize_automatic
 from .errors import LandmarkError, ParameterError
-from .landmarks import check_points
+from .core.landmark_pairs import check_points
+from .core.mirror_fill import fill_from_mirror
 from .parameters import ARRAYS, CORE, keyword_signature, parameters_doc, validate_parameters
-from .symmetrize import SymmetrizationResult, check_landmarks, solve
+from .core.symmetrize import SymmetrizationResult, check_landmarks, solve
 
 
 def _excluded_vertices(auto_excluded, count: int, pairs: str) -> np.ndarray | None:
@@ -53,14 +55,63 @@ def _faces(faces, count: int) -> np.ndarray:
     return faces
 
 
+def _missing(missing, missing_faces, points: np.ndarray, faces: np.ndarray):
+    """(missing (N,) in [0, 1], faces left out of the intact surface (F,) bool) checked, or None."""
+    if missing is None:
+        if missing_faces is not None:
+            raise ParameterError("`missing_faces` marks faces of the missing region; give `missing` too.")
+        return None
+    if len(faces) == 0:
+        raise ParameterError("`missing` vertices take the mirror shape of the intact surface, and there is none "
+                             "without faces; pass `faces`, or leave `missing` out.")
+    values = np.asarray(missing, dtype=float)
+    if values.shape != (len(points),) or not np.isfinite(values).all():
+        raise ParameterError(f"`missing` needs one finite value in [0, 1] per vertex ({len(points)}), got "
+                             f"shape {values.shape}.")
+    excluded = np.zeros(len(faces), dtype=bool) if missing_faces is None else np.asarray(missing_faces, dtype=bool)
+    if excluded.shape != (len(faces),):
+        raise ParameterError(f"`missing_faces` needs one bool per face ({len(faces)}), got shape {excluded.shape}.")
+    return np.clip(values, 0.0, 1.0), excluded
+
+
+def _filled(result: SymmetrizationResult, points, faces, missing, missing_faces, frame: str) -> SymmetrizationResult:
+    """``result`` (input frame) with the missing region given the mirror shape of the intact side, then in
+    ``frame``; the asymmetry stays the distance moved in the input frame."""
+    report = result.report
+    filled = fill_from_mirror(result.points, faces, missing, report["plane_normal"], report["plane_offset"],
+                              missing_faces)
+    report["filled_vertices"] = int(np.count_nonzero(missing))
+    result = dataclasses.replace(result, points=filled, asymmetry=np.linalg.norm(filled - points, axis=1))
+    if frame == "canonical":
+        transform = np.array(report["canonical_from_input"])
+        result = dataclasses.replace(result, points=result.points @ transform[:3, :3].T + transform[:3, 3])
+        report.update(output_frame="canonical", plane_normal=[1.0, 0.0, 0.0], plane_offset=0.0)
+    return result
+
+
 def symmetrize(points, left=None, right=None, pair_ids=None, midline=None, left_weights=None,
                right_weights=None, progress=None, faces=None, auto_excluded=None, auto_config=None,
-               **params) -> SymmetrizationResult:
-    if progress is not None:
-        progress(0.0, "checking the input")
+               missing=None, missing_faces=None, **params) -> SymmetrizationResult:
     options = validate_parameters(params, ARRAYS)
     points = check_points(points)
     faces = _faces(faces, len(points))
+    region = _missing(missing, missing_faces, points, faces)
+    if region is None:
+        return _symmetrize(points, left, right, pair_ids, midline, left_weights, right_weights, progress, faces,
+                           auto_excluded, auto_config, options)
+    if options["pairs"] != "landmarks":  # a missing part's pairs would pull the intact side toward it
+        mask = np.zeros(len(points), dtype=bool)
+        mask[_excluded_vertices(auto_excluded, len(points), options["pairs"]) if auto_excluded is not None else []] = True
+        auto_excluded = mask | (region[0] > 0)
+    result = _symmetrize(points, left, right, pair_ids, midline, left_weights, right_weights, progress, faces,
+                         auto_excluded, auto_config, {**options, "output_frame": "input"})
+    return _filled(result, points, faces, *region, options["output_frame"])
+
+
+def _symmetrize(points, left, right, pair_ids, midline, left_weights, right_weights, progress, faces,
+                auto_excluded, auto_config, options) -> SymmetrizationResult:
+    if progress is not None:
+        progress(0.0, "checking the input")
     excluded = _excluded_vertices(auto_excluded, len(points), options["pairs"])
     core = {key: value for key, value in options.items() if key in validate_parameters({}, CORE)}
     given = left is not None or right is not None or midline is not None
@@ -83,7 +134,8 @@ symmetrize.__signature__ = keyword_signature(
       for name, default in (("points", inspect.Parameter.empty), ("left", None), ("right", None),
                             ("pair_ids", None), ("midline", None), ("left_weights", None),
                             ("right_weights", None), ("progress", None), ("faces", None),
-                            ("auto_excluded", None), ("auto_config", None))),
+                            ("auto_excluded", None), ("auto_config", None), ("missing", None),
+                            ("missing_faces", None))),
     layers=ARRAYS)
 symmetrize.__doc__ = f"""Symmetrize ``points`` (N, 3) from landmark pairs (left[k], right[k]), automatic pairs, or both.
 
@@ -119,6 +171,14 @@ auto_excluded : (N,) bool array or (k,) int array of vertex indices, optional
     ``pairs='auto'`` or ``'landmarks+auto'``.
 auto_config : filter_symblend.auto.AutoConfig, optional
     The automatic pairs' settings (default ``AutoConfig()``; see its fields).
+missing : (N,) float array in [0, 1], optional
+    How much of each vertex is missing or broken: after the solve it moves
+    that far toward its closest point on the intact surface reflected across
+    the symmetry plane (the paper's Figure 9), faded in at the border; with
+    automatic pairs these vertices are kept out of the pairs. Needs ``faces``.
+missing_faces : (F,) bool array, optional
+    Faces that are not intact surface though their vertices are (e.g. the
+    patch a hole filler spanned); only with ``missing``.
 {parameters_doc(ARRAYS)}
 
 Returns

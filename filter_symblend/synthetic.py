@@ -8,9 +8,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .asymmetry import fit_mirror_plane
-from .geometry import normalize, rotation_about_axis, similarity_fit, voxel_grid
-from .mesh_geometry import farthest_point_order
+from .core.landmark_asymmetry import fit_mirror_plane
+from .core.geometry import normalize, rotation_about_axis, similarity_fit, voxel_grid
+from .core.mesh_quantities import farthest_point_order
 
 
 def mirror_partners(points: np.ndarray, tolerance: float = 1e-4):

@@ -38,11 +38,12 @@ import warnings
 import numpy as np
 import pymeshlab
 
-from filter_symblend import GeometryError, SymblendError, SymblendWarning, symmetrize, synthetic, warp
-from filter_symblend.baseline import mirror_average
-from filter_symblend.global_solve import global_solve
-from filter_symblend.local_symmetries import local_symmetries
-from filter_symblend.neighbourhoods import mean_nearest_spacing, pair_weights, require_connected
+from filter_symblend import GeometryError, SymblendError, SymblendWarning, symmetrize, synthetic
+from filter_symblend.core import warp
+from filter_symblend.core.baseline import mirror_average
+from filter_symblend.core.global_solve import global_solve
+from filter_symblend.core.local_symmetries import local_symmetries
+from filter_symblend.core.neighbourhoods import mean_nearest_spacing, pair_weights, require_connected
 
 SAMPLES = pathlib.Path(pymeshlab.__file__).parent / "tests" / "sample_meshes"
 SHARED = pathlib.Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -402,8 +403,8 @@ def _pieces(faces: np.ndarray, count: int) -> int:
 def _outline_distances(points: np.ndarray, faces: np.ndarray, normal, offset) -> np.ndarray:
     """A flat mesh's asymmetry is its outline's: distance from each boundary vertex to the reflected
     boundary (edges used by one triangle), by closest points on the edges as thin triangles."""
-    from filter_symblend.geometry import reflection_across_plane
-    from filter_symblend.mirror_fill import closest_points_on_surface
+    from filter_symblend.core.geometry import reflection_across_plane
+    from filter_symblend.core.mirror_fill import closest_points_on_surface
     edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
     unique, counts = np.unique(edges, axis=0, return_counts=True)
     boundary = unique[counts == 1]
@@ -417,8 +418,8 @@ def mirror_statistics(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """RMS, median and 90th percentile (% of the diagonal) of the distance from each referenced vertex to
     the surface reflected across its best mirror plane, fitted afresh (an independent measure); for a flat
     mesh, from each vertex of its outline to the reflected outline."""
-    from filter_symblend.geometry import flat_normal
-    from filter_symblend.surface_symmetry import fit_surface_mirror_plane, mirror_distances
+    from filter_symblend.core.geometry import flat_normal
+    from filter_symblend.checks.surface_asymmetry import fit_surface_mirror_plane, mirror_distances
     used = _referenced(faces, len(points))
     plane = fit_surface_mirror_plane(points[used])
     if len(faces) and flat_normal(points[used]) is not None:
@@ -432,7 +433,7 @@ def mirror_statistics(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
 def surface_hausdorff(before: np.ndarray, after: np.ndarray, faces: np.ndarray) -> float:
     """Two-way Hausdorff distance between two embeddings of one mesh, sampled at the referenced vertices,
     % of the diagonal."""
-    from filter_symblend.mirror_fill import closest_points_on_surface
+    from filter_symblend.core.mirror_fill import closest_points_on_surface
     used = _referenced(faces, len(before))
     if not len(faces):
         return 100 * float(np.abs(before - after).max()) / np.linalg.norm(np.ptp(before, axis=0))
@@ -475,8 +476,8 @@ def corpus_cases():
 def core_seconds(points: np.ndarray, faces: np.ndarray, mode: str) -> float:
     """Seconds of the paper's method with 2,000 landmark pairs (fewer if the mesh has fewer): the vertices'
     approximate mirror partners across the mesh's best plane, spread by a voxel grid."""
-    from filter_symblend.geometry import reflection_across_plane
-    from filter_symblend.surface_symmetry import fit_surface_mirror_plane
+    from filter_symblend.core.geometry import reflection_across_plane
+    from filter_symblend.checks.surface_asymmetry import fit_surface_mirror_plane
     from scipy.spatial import cKDTree
     used = np.flatnonzero(_referenced(faces, len(points)))
     normal, offset = fit_surface_mirror_plane(points[used])
@@ -487,7 +488,7 @@ def core_seconds(points: np.ndarray, faces: np.ndarray, mode: str) -> float:
     left, right = left[first], right[first]
     left, right = left[~np.isin(left, right)], right[~np.isin(left, right)]
     if len(left) > 2000:
-        from filter_symblend.geometry import voxel_grid
+        from filter_symblend.core.geometry import voxel_grid
         _, chosen = np.unique(voxel_grid(points[left], 2000), return_index=True)
         left, right = left[chosen], right[chosen]
     start = time.perf_counter()

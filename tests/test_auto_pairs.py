@@ -15,9 +15,9 @@ from filter_symblend.auto import AutoConfig
 from filter_symblend.auto.maps import plane_map
 from filter_symblend.auto.surface import Surface
 from filter_symblend.auto.twins import find_twins
-from filter_symblend.mesh_geometry import mean_spacing, vertex_normals
-from filter_symblend.mirror_fill import closest_points_on_surface
-from filter_symblend.surface_symmetry import mirror_asymmetry
+from filter_symblend.core.mesh_quantities import mean_spacing, vertex_normals
+from filter_symblend.core.mirror_fill import closest_points_on_surface
+from filter_symblend.checks.surface_asymmetry import mirror_asymmetry
 
 from conftest import SAMPLE_MESHES, SHARED_DATA, load_ground_truth, meshset_with_pairs, symmetric_blob, twins
 
@@ -266,7 +266,7 @@ def test_a_singular_system_is_an_error_not_a_non_finite_output(blob, monkeypatch
     """Whatever goes wrong inside the solve (here the global solve is made to return NaN), the caller gets
     a GeometryError, for landmarks and automatic pairs alike, never NaN coordinates."""
     from importlib import import_module
-    core = import_module("filter_symblend.symmetrize")  # the module (the package's `symmetrize` is the function)
+    core = import_module("filter_symblend.core.symmetrize")
     points, faces = blob
     original = core.global_solve
 

@@ -13,7 +13,7 @@ import pytest
 from filter_symblend import PARAMETERS, synthetic
 from filter_symblend.cli import main
 from conftest import meshlab_mirror_distance
-from filter_symblend.landmark_files import Landmark, LandmarkSet, read_landmarks, write_landmarks
+from filter_symblend.landmarks.files import Landmark, LandmarkSet, read_landmarks, write_landmarks
 
 
 @pytest.fixture()
@@ -123,7 +123,7 @@ def test_real_process(tmp_path, bent_cow_files):
 
 
 def test_ply_output_round_trips_its_attributes_and_symmetrizes_again(tmp_path, bent_cow_files):
-    from filter_symblend.ply_attributes import load_mesh_with_attributes, read_ply_vertex_properties
+    from filter_symblend.meshlab.ply_attributes import load_mesh_with_attributes, read_ply_vertex_properties
 
     mesh_path, landmark_path, *_ = bent_cow_files
     output = tmp_path / "out.ply"
@@ -140,7 +140,7 @@ def test_ply_output_round_trips_its_attributes_and_symmetrizes_again(tmp_path, b
 
 
 def test_ascii_ply_properties(tmp_path):
-    from filter_symblend.ply_attributes import read_ply_vertex_properties
+    from filter_symblend.meshlab.ply_attributes import read_ply_vertex_properties
 
     path = tmp_path / "a.ply"
     path.write_text("ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
@@ -165,7 +165,7 @@ def test_midline_and_missing_options(tmp_path, bent_cow_files, cow):
     data = json.loads(report.read_text())
     assert data["midline_count"] == 6 and data["landmarks"]["missing"] == ["R_3", "R_4"]
     ms = pymeshlab.MeshSet()
-    from filter_symblend.ply_attributes import load_mesh_with_attributes
+    from filter_symblend.meshlab.ply_attributes import load_mesh_with_attributes
 
     assert "symblend_weight" in load_mesh_with_attributes(ms, output)
     out = ms.current_mesh().vertex_matrix()
@@ -202,7 +202,7 @@ def test_unreadable_mesh_unwritable_output_and_side_words(tmp_path, bent_cow_fil
 ])
 def test_unreadable_ply_properties(tmp_path, header, pattern):
     from filter_symblend import SymblendError
-    from filter_symblend.ply_attributes import read_ply_vertex_properties
+    from filter_symblend.meshlab.ply_attributes import read_ply_vertex_properties
 
     path = tmp_path / "bad.ply"
     path.write_bytes(header)
@@ -249,7 +249,7 @@ def _probe_arguments(tmp_path, mesh_path, landmark_path):
 def test_bad_outputs_and_damaged_meshes_are_refused_before_any_work(tmp_path, bent_cow_files, capsys, monkeypatch):
     import hashlib
 
-    import filter_symblend.meshset_filter as meshset_filter
+    import filter_symblend.meshlab.meshset_filter as meshset_filter
 
     mesh_path, landmark_path, *_ = bent_cow_files
 
@@ -473,9 +473,20 @@ def test_curve_option_errors(tmp_path, curve_files, capsys):
     assert "'-1' is not a positive length in mesh units" in capsys.readouterr().err
     assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "--curve-spacing", "0.05",
                  "-o", str(output)]) == 1
-    assert "--curve-spacing spaces the semilandmarks of curves; add --curves" in capsys.readouterr().err
+    assert "`curve_spacing` spaces the semilandmarks of curves; set curves=True (--curves)" in capsys.readouterr().err
     preset = pathlib.Path(__file__).resolve().parents[1] / "mlx_presets" / "fossil_restoration.mlx"
     assert main(["mlx", str(preset), str(mesh_path), "-l", str(landmark_path), "--curves", "-o", str(output)]) == 0
     assert "has width_spacing 0, so its widths are multiples of the semilandmark spacing; set width_spacing to" \
         in capsys.readouterr().err
     assert output.exists()
+
+
+def test_pairs_from_a_landmark_file_in_python_are_what_the_command_uses(bent_cow_files, cow):
+    from filter_symblend import pairs_from_landmark_file, symmetrize
+    mesh_path, landmark_path, deformed, left, right = bent_cow_files
+    snapped = pairs_from_landmark_file(deformed, cow.faces, landmark_path)
+    np.testing.assert_array_equal(snapped.pairs.left, left)  # placed exactly on these vertices
+    np.testing.assert_array_equal(snapped.pairs.right, right)
+    assert snapped.pair_names[0] == ("L_0", "R_0") and snapped.frame_note == "coordinates used as stored"
+    result = symmetrize(deformed, snapped.pairs.left, snapped.pairs.right, faces=cow.faces)
+    assert result.report["landmark_asymmetry_after"]["max_relative"] < 1e-9

@@ -7,12 +7,12 @@ import pytest
 from scipy.spatial import cKDTree
 
 from filter_symblend import LandmarkError, SymblendWarning, symmetrize, synthetic
-from filter_symblend.curves import add_curve_pairs, find_curves
-from filter_symblend.landmark_files import Landmark, LandmarkSet
-from filter_symblend.mesh_geometry import farthest_point_order
-from filter_symblend.neighbourhoods import mean_nearest_spacing
-from filter_symblend.pairing import snap_pairs
-from filter_symblend.semilandmarks import arc_lengths, edge_graph, equal_arc_samples, resample_curve, surface_path
+from filter_symblend.landmarks.curves import add_curve_pairs, find_curves
+from filter_symblend.landmarks.files import Landmark, LandmarkSet
+from filter_symblend.core.mesh_quantities import farthest_point_order
+from filter_symblend.core.neighbourhoods import mean_nearest_spacing
+from filter_symblend.landmarks.pairing import snap_pairs
+from filter_symblend.landmarks.semilandmarks import arc_lengths, edge_graph, equal_arc_samples, resample_curve, surface_path
 
 from conftest import symmetric_blob, twins
 

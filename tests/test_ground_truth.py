@@ -7,9 +7,9 @@ import pytest
 from scipy.spatial import cKDTree
 
 from filter_symblend import SymblendWarning, symmetrize, synthetic
-from filter_symblend.baseline import mirror_average
-from filter_symblend.geometry import reflection_across_plane, rigid_fit
-from filter_symblend.mesh_geometry import farthest_point_order
+from filter_symblend.core.baseline import mirror_average
+from filter_symblend.core.geometry import reflection_across_plane, rigid_fit
+from filter_symblend.core.mesh_quantities import farthest_point_order
 
 MODES = ["standard", "affine", "articulated"]
 
@@ -213,7 +213,7 @@ def test_midline_landmarks_end_up_on_the_symmetry_plane(symmetric_mesh, mode):
 
 
 def fit_plane_normal(points, left, right):
-    from filter_symblend.asymmetry import fit_mirror_plane
+    from filter_symblend.core.landmark_asymmetry import fit_mirror_plane
 
     return fit_mirror_plane(points[left], points[right]).normal
 
@@ -229,7 +229,7 @@ def test_a_weight_zero_side_takes_the_mirror_shape_of_the_other(cow):
     right_weights = np.where(region[right], 0.0, 1.0)
     assert (right_weights == 0).sum() >= 5
     mirrored_region = np.flatnonzero(region & (cow.partner >= 0))
-    from filter_symblend.geometry import similarity_fit
+    from filter_symblend.core.geometry import similarity_fit
 
     plain = similarity_fit(quiet_symmetrize(broken, left, right).points, cow.points)
     weighted = quiet_symmetrize(broken, left, right, right_weights=right_weights).points
@@ -241,7 +241,7 @@ def test_a_weight_zero_side_takes_the_mirror_shape_of_the_other(cow):
 
 
 def test_the_approximate_warp_keeps_the_pairs_exactly_symmetric_and_the_shape(cow, monkeypatch):
-    from filter_symblend import warp
+    from filter_symblend.core import warp
 
     left, right = cow.landmarks(150)
     deformed = synthetic.figure_1_deformation(cow.points)

@@ -2,7 +2,7 @@
 
 import pytest
 
-from filter_symblend.landmark_files import (FORMATS, Landmark, LandmarkFileError, LandmarkSet, read_landmarks,
+from filter_symblend.landmarks.files import (FORMATS, Landmark, LandmarkFileError, LandmarkSet, read_landmarks,
                                             write_landmarks)
 
 SAMPLE = LandmarkSet([

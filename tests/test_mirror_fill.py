@@ -5,7 +5,7 @@ import pytest
 
 import filter_symblend
 from filter_symblend import MeshSetError, SymblendWarning
-from filter_symblend.mirror_fill import closest_points_on_surface, closest_points_on_triangles, fill_from_mirror
+from filter_symblend.core.mirror_fill import closest_points_on_surface, closest_points_on_triangles, fill_from_mirror
 from conftest import meshset_with_pairs
 
 
@@ -99,3 +99,35 @@ def test_a_fill_with_no_intact_face_left_is_an_error(cow):
     everything = np.ones(len(cow.points))
     with pytest.raises(filter_symblend.GeometryError, match="No intact face is left to mirror"):
         fill_from_mirror(cow.points, cow.faces, everything, [1.0, 0.0, 0.0], cow.offset)
+
+
+def test_the_fill_runs_on_arrays_as_in_the_filter_and_in_either_frame(cow):
+    """`symmetrize(..., missing=...)` is what the filter's missing_region does; the canonical frame is
+    the same fill moved rigidly."""
+    from filter_symblend import ParameterError, symmetrize
+    centre = cow.points[np.argmax(cow.points[:, 0])]
+    broken = np.linalg.norm(cow.points - centre, axis=1) < 0.07 * cow.diagonal
+    bumped = cow.points.copy()
+    bumped[broken, 0] += 0.03 * cow.diagonal
+    left, right = cow.landmarks(150)
+    sound = ~broken[left] & ~broken[right]
+    missing = np.where(broken, 1.0, 0.0)
+    result = symmetrize(bumped, left[sound], right[sound], faces=cow.faces, missing=missing)
+    ms = meshset_with_pairs(bumped, cow.faces, left[sound], right[sound])
+    ms.current_mesh().add_vertex_custom_scalar_attribute(1.0 - missing, "symblend_weight")
+    ms.generate_symmetrized_mesh(missing_region="weight")
+    np.testing.assert_allclose(result.points, ms.current_mesh().vertex_matrix(), atol=1e-9)
+    assert result.report["filled_vertices"] == broken.sum()
+    assert _distance_to_truth(cow, result.points[broken]).max() < _distance_to_truth(cow, bumped[broken]).max() / 3
+    canonical = symmetrize(bumped, left[sound], right[sound], faces=cow.faces, missing=missing,
+                           output_frame="canonical")
+    transform = np.array(canonical.report["canonical_from_input"])
+    np.testing.assert_allclose(canonical.points, result.points @ transform[:3, :3].T + transform[:3, 3], atol=1e-9)
+    with pytest.raises(ParameterError, match=r"`missing` vertices take the mirror shape .* pass `faces`"):
+        symmetrize(bumped, left, right, missing=missing)
+    with pytest.raises(ParameterError, match=r"`missing` needs one finite value in \[0, 1\] per vertex"):
+        symmetrize(bumped, left, right, faces=cow.faces, missing=missing[:10])
+    with pytest.raises(ParameterError, match=r"`missing_faces` marks faces .* give `missing` too"):
+        symmetrize(bumped, left, right, faces=cow.faces, missing_faces=np.zeros(len(cow.faces), bool))
+    with pytest.raises(ParameterError, match=r"`missing_faces` needs one bool per face"):
+        symmetrize(bumped, left, right, faces=cow.faces, missing=missing, missing_faces=[True])

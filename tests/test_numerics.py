@@ -6,11 +6,11 @@ import scipy.sparse as sp
 from scipy.interpolate import RBFInterpolator
 from scipy.sparse.csgraph import connected_components
 
-from filter_symblend.geometry import MIRROR_X, minimal_rotation, rotation_about_axis
-from filter_symblend.global_solve import MINUS_X, global_solve
-from filter_symblend.local_symmetries import local_symmetries
-from filter_symblend.neighbourhoods import pair_weights
-from filter_symblend import warp
+from filter_symblend.core.geometry import MIRROR_X, minimal_rotation, rotation_about_axis
+from filter_symblend.core.global_solve import MINUS_X, global_solve
+from filter_symblend.core.local_symmetries import local_symmetries
+from filter_symblend.core.neighbourhoods import pair_weights
+from filter_symblend.core import warp
 
 MODES = ["standard", "affine", "articulated"]
 
@@ -176,7 +176,7 @@ def test_global_solve_reproduces_a_globally_affine_input_exactly():
     local = local_symmetries("affine", pair_weights(p, q, 2.0), p, q, np.arange(1, 31))
     frame = minimal_rotation(local.normals[:1], MINUS_X)[0]
     s_matrix = local.left_transforms[0]
-    from filter_symblend.symmetrize import _rotated
+    from filter_symblend.core.symmetrize import _rotated
     r, s = global_solve(phi, p @ frame.T, q @ frame.T, _rotated(local, frame), alpha=0.01)
     expected = np.vstack([p, q]) @ (frame @ s_matrix).T
     expected -= expected.mean(axis=0) * [0, 1, 1]
@@ -236,7 +236,7 @@ def test_the_approximate_spline_stays_close_to_the_exact_one_on_a_smooth_map(mon
 
 def test_iterative_solve_equals_the_dense_one(monkeypatch):
     """The conjugate-gradient path (large sparse systems) gives the dense Cholesky answer."""
-    import filter_symblend.global_solve as solve_module
+    import filter_symblend.core.global_solve as solve_module
 
     rng = np.random.default_rng(4)
     p, q = symmetric_pairs(300, seed=6)
@@ -256,7 +256,7 @@ def test_iterative_solve_equals_the_dense_one(monkeypatch):
 
 
 def test_a_solve_that_does_not_converge_says_so(monkeypatch):
-    import filter_symblend.global_solve as solve_module
+    import filter_symblend.core.global_solve as solve_module
     from filter_symblend import GeometryError
 
     p, q = symmetric_pairs(300, seed=6)
@@ -290,7 +290,7 @@ def test_the_approximate_spline_handles_flat_patches(monkeypatch):
 def test_farthest_point_order_matches_the_textbook_loop():
     """The per-axis, squared-distance sampler picks the same points in the same order as the
     plain loop over Euclidean norms (it is 10x faster at 40k points x 6,000 picks)."""
-    from filter_symblend.mesh_geometry import farthest_point_order
+    from filter_symblend.core.mesh_quantities import farthest_point_order
 
     points = np.random.default_rng(8).normal(size=(3000, 3))
     distance, expected = np.linalg.norm(points - points[7], axis=1), [7]

@@ -2,7 +2,7 @@
 
 ``symmetrize_automatic`` runs the rounds (see :mod:`.rounds`); ``AutoConfig`` holds what
 stays tunable. The pairs it finds go through the same checks and the same solve as a
-user's landmarks (:mod:`filter_symblend.symmetrize`).
+user's landmarks (:mod:`filter_symblend.core.symmetrize`).
 """
 
 from .config import DEFAULT, AutoConfig

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..geometry import MIRROR_X, proper_rotation_fit
+from ..core.geometry import MIRROR_X, proper_rotation_fit
 from .config import AutoConfig
 from .surface import Surface
 

@@ -19,8 +19,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..geometry import normalize, reflection_across_plane, whitening
-from ..surface_symmetry import fit_surface_mirror_plane
+from ..core.geometry import normalize, reflection_across_plane, whitening
+from ..checks.surface_asymmetry import fit_surface_mirror_plane
 from .config import AutoConfig
 from .registration import coherent_point_drift, registration_sample
 from .surface import Surface

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.distance import cdist
 
-from ..mesh_geometry import farthest_point_order
+from ..core.mesh_quantities import farthest_point_order
 from .surface import Surface
 
 BETA = 3.0  # kernel width, x the sample's RMS radius: a field smooth over a third of the shape

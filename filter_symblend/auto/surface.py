@@ -19,9 +19,9 @@ import functools
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..geometry import flat_normal, normalize
-from ..mesh_geometry import vertex_normals
-from ..mirror_fill import nearest_on_triangles
+from ..core.geometry import flat_normal, normalize
+from ..core.mesh_quantities import vertex_normals
+from ..core.mirror_fill import nearest_on_triangles
 
 POINT_CLOUD_NEIGHBOURS = 8  # neighbours whose mean distance is a point cloud's local spacing
 

@@ -15,7 +15,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
-from .errors import GeometryError, id_list
+from ..errors import GeometryError, id_list
 
 TRUNCATION = 3.0
 

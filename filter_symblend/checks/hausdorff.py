@@ -7,7 +7,7 @@ import numpy as np
 import pymeshlab
 from scipy.spatial import cKDTree
 
-from .mirror_fill import closest_points_on_surface
+from ..core.mirror_fill import closest_points_on_surface
 
 # Vertices, evenly strided, sampled on each surface for the two-way distance. Closest points on a
 # centroid KD-tree cost the same whatever the distance; MeshLab's grid slows down on far samples
@@ -26,7 +26,7 @@ def two_way_distance(a: np.ndarray, a_faces: np.ndarray, b: np.ndarray, b_faces:
     """max, mean and RMS of the distance (mesh units) from at most ``samples`` evenly strided vertices of
     each surface ``(points (N, 3), faces (F, 3))`` to the other (max: the larger direction; mean, RMS:
     their average), and ``samples`` used per surface. A point cloud (no faces) is its points."""
-    from .surface_symmetry import evenly
+    from .surface_asymmetry import evenly
 
     directions = [_one_way(evenly(a, samples), b, b_faces), _one_way(evenly(b, samples), a, a_faces)]
     return {"max": float(max(d.max() for d in directions)),

@@ -11,9 +11,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .errors import GeometryError
+from ..errors import GeometryError
 from .geometry import reflection_across_plane
-from .mesh_geometry import mean_spacing
+from .mesh_quantities import mean_spacing
 
 CANDIDATE_FACES = 16  # nearest triangle centroids searched per query point
 QUERY_CHUNK = 20000  # queries per batch: bounds memory to about 100 MB

@@ -18,9 +18,9 @@ import warnings
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .errors import LandmarkError, SymblendWarning
-from .landmark_files import LandmarkFileError, LandmarkSet
-from .landmarks import LandmarkPairs
+from ..errors import LandmarkError, SymblendWarning
+from .files import LandmarkFileError, LandmarkSet
+from ..core.landmark_pairs import LandmarkPairs
 
 LEFT_WORDS = ("l", "left", "lt")
 RIGHT_WORDS = ("r", "right", "rt")
@@ -118,6 +118,7 @@ class SnappedPairs:
     unplaced: list[str]
     curves: list[dict] = dataclasses.field(default_factory=list)  # what each curve became (curves.py)
     placed_spacing: float | None = None  # with curves: mean nearest spacing of the placed points
+    frame_note: str = ""  # how the file's coordinates were converted to the mesh's frame
 
     def weights(self, missing: list[str]):
         """(left, right) weights (n,): 0 for the landmarks named in ``missing``, 1 elsewhere."""

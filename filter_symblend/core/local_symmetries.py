@@ -18,7 +18,7 @@ import dataclasses
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import DegenerateNeighbourhoodError, id_list
+from ..errors import DegenerateNeighbourhoodError, id_list
 from .geometry import normalize, proper_rotation_fit, rotation_about_axis
 
 DEGENERATE_RATIO = 1e-8  # smallest/largest spread of a neighbourhood below which it has no 3D frame

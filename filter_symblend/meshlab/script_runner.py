@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import pymeshlab
 
-from .errors import MeshSetError, SymblendError
+from ..errors import MeshSetError, SymblendError
 from .meshset_clone import clone_meshset
 from .meshset_filter import DISPLAY_NAME, run_filter
 from .mlx import (FilterNode, NativeCall, ScriptError, native_call, node_from_element,

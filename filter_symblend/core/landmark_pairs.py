@@ -12,7 +12,7 @@ import dataclasses
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .errors import GeometryError, LandmarkError, id_list
+from ..errors import GeometryError, LandmarkError, id_list
 from .geometry import flat_normal
 
 MIN_PAIRS = 4

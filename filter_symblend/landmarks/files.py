@@ -22,7 +22,7 @@ import math
 import pathlib
 import xml.etree.ElementTree as ElementTree
 
-from .errors import SymblendError
+from ..errors import SymblendError
 
 MISSING_PTS_VALUE = 9999.0
 OLD_FCSV_SYSTEMS = {"0": "RAS", "1": "LPS"}

@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pymeshlab
 
-from .asymmetry import MirrorFit, fit_mirror_plane
-from .attributes import optional_attribute
+from ..core.landmark_asymmetry import MirrorFit, fit_mirror_plane
+from ..meshlab.attributes import optional_attribute
 from .hausdorff import two_way_distance
-from .landmarks import pairs_from_attribute
-from .parameters import DEFAULTS
-from .surface_symmetry import CHECK_SAMPLES, fit_surface_mirror_plane, mirror_asymmetry, refine_mirror_plane
+from ..core.landmark_pairs import pairs_from_attribute
+from ..parameters import DEFAULTS
+from .surface_asymmetry import CHECK_SAMPLES, fit_surface_mirror_plane, mirror_asymmetry, refine_mirror_plane
 
 
 def _mirror_plane(mesh: pymeshlab.Mesh, pair_attribute: str, start) -> tuple[np.ndarray, float]:

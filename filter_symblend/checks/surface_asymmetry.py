@@ -14,9 +14,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .asymmetry import MirrorFit, fit_mirror_plane
-from .geometry import flat_normal, hemisphere_directions, normalize, reflection_across_plane
-from .mirror_fill import closest_points_on_surface
+from ..core.landmark_asymmetry import MirrorFit, fit_mirror_plane
+from ..core.geometry import flat_normal, hemisphere_directions, normalize, reflection_across_plane
+from ..core.mirror_fill import closest_points_on_surface
 
 ICP_SAMPLES = 10000  # vertices used to refine the best plane
 ICP_ITERATIONS = 40

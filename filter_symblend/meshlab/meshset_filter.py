@@ -11,7 +11,6 @@ deleted and the input is current again.
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import inspect
 import warnings
@@ -20,15 +19,14 @@ import numpy as np
 import pymeshlab
 
 from . import recording
-from .asymmetry import fit_mirror_plane
+from ..core.landmark_asymmetry import fit_mirror_plane
 from .attributes import optional_attribute, read_landmark_attributes
-from .errors import MeshSetError, ParameterError, SymblendWarning
-from .hausdorff import two_way_distance
-from .mirror_fill import fill_from_mirror
-from .parameters import PARAMETERS, keyword_signature, parameters_doc, validate_parameters
-from .surface_symmetry import CHECK_SAMPLES, mirror_asymmetry, refine_mirror_plane
-from .pipeline import symmetrize
-from .symmetrize import SymmetrizationResult
+from ..errors import MeshSetError, ParameterError, SymblendWarning
+from ..checks.hausdorff import two_way_distance
+from ..parameters import PARAMETERS, keyword_signature, parameters_doc, validate_parameters
+from ..checks.surface_asymmetry import CHECK_SAMPLES, mirror_asymmetry, refine_mirror_plane
+from ..pipeline import symmetrize
+from ..core.symmetrize import SymmetrizationResult
 
 FILTER_NAME = "generate_symmetrized_mesh"
 DISPLAY_NAME = "Symmetrize: Closed-form Blending of Local Symmetries"
@@ -122,29 +120,17 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress) -> SymmetrizationRes
     region = _missing_region(mesh, options["missing_region"], options["weight_attribute"])
     core = {p.name: options[p.name] for p in PARAMETERS if p.layer != "meshset"}
     points, faces = mesh.vertex_matrix(), mesh.face_matrix()
-    # The fill works in the input frame, where the asymmetry (distance moved) is measured.
-    core["output_frame"] = "input"
+    missing, missing_faces = (None, None) if region is None else region
     automatic = options["pairs"] == "auto"
-    # A missing or broken part must not be paired automatically: its pairs would pull the sound side toward it.
-    excluded = region[0] > 0 if region is not None and options["pairs"] != "landmarks" else None
     if automatic:  # the landmark attributes are not read
-        result = symmetrize(points, progress=progress, faces=faces, auto_excluded=excluded, **core)
+        result = symmetrize(points, progress=progress, faces=faces, missing=missing, missing_faces=missing_faces,
+                            **core)
     else:
         names = {name: options[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
         pairs, left_weights, right_weights = read_landmark_attributes(mesh, **names)
-        result = symmetrize(points, pairs.left, pairs.right, pairs.ids, pairs.midline,
-                            left_weights, right_weights, progress, faces, auto_excluded=excluded, **core)
+        result = symmetrize(points, pairs.left, pairs.right, pairs.ids, pairs.midline, left_weights, right_weights,
+                            progress, faces, missing=missing, missing_faces=missing_faces, **core)
     report = result.report
-    if region is not None:
-        missing, excluded = region
-        filled = fill_from_mirror(result.points, faces, missing, report["plane_normal"],
-                                  report["plane_offset"], excluded)
-        result = dataclasses.replace(result, points=filled, asymmetry=np.linalg.norm(filled - points, axis=1))
-        report["filled_vertices"] = int(np.count_nonzero(missing))
-    if options["output_frame"] == "canonical":
-        transform = np.array(report["canonical_from_input"])
-        result = dataclasses.replace(result, points=result.points @ transform[:3, :3].T + transform[:3, 3])
-        report.update(output_frame="canonical", plane_normal=[1.0, 0.0, 0.0], plane_offset=0.0)
     if options["checks"] != "none":
         if automatic:  # the automatic pairing fitted the input's surface plane already
             surface = report["auto_pairs"]["surface_plane"]

@@ -11,14 +11,14 @@ from typing import Any
 
 import numpy as np
 
-from .asymmetry import fit_mirror_plane
-from .errors import GeometryError, LandmarkError, SymblendWarning, id_list
+from .landmark_asymmetry import fit_mirror_plane
+from ..errors import GeometryError, LandmarkError, SymblendWarning, id_list
 from .geometry import flat_normal, minimal_rotation, normalize, rigid_fit
 from .global_solve import MINUS_X, global_solve
-from .landmarks import LandmarkPairs, check_pairs, check_points, midline_labels
+from .landmark_pairs import LandmarkPairs, check_pairs, check_points, midline_labels
 from .local_symmetries import LocalSymmetries, local_symmetries
 from .neighbourhoods import mean_nearest_spacing, pair_weights, require_connected, scaled_weights
-from .parameters import CORE, keyword_signature, parameters_doc, validate_parameters
+from ..parameters import CORE, keyword_signature, parameters_doc, validate_parameters
 from .warp import ApproximateThinPlateSpline, thin_plate_spline
 
 # A pair's own mirror misfit, in neighbourhood radii, above which it is reported.

@@ -43,7 +43,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.linalg import cho_factor, cho_solve
 
-from .errors import GeometryError
+from ..errors import GeometryError
 from .geometry import minimal_rotation, voxel_grid
 from .local_symmetries import LocalSymmetries
 from .neighbourhoods import scaled_weights

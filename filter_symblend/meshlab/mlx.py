@@ -18,9 +18,9 @@ import xml.etree.ElementTree as ElementTree
 import numpy as np
 import pymeshlab
 
-from .errors import ParameterError, SymblendError
+from ..errors import ParameterError, SymblendError
 from .meshset_filter import DISPLAY_NAME
-from .parameters import PARAMETERS, PARAMETERS_BY_NAME, validate_parameters
+from ..parameters import PARAMETERS, PARAMETERS_BY_NAME, validate_parameters
 
 
 class ScriptError(SymblendError):

@@ -17,7 +17,7 @@ import numpy as np
 from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from .errors import LandmarkError
+from ..errors import LandmarkError
 
 SEARCH_REACH = 4.0  # Dijkstra first stops at this many times the longest control chord
 

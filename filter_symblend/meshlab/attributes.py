@@ -13,9 +13,9 @@ from __future__ import annotations
 import numpy as np
 import pymeshlab
 
-from .errors import LandmarkError
-from .landmarks import LandmarkPairs, pairs_from_attribute
-from .parameters import DEFAULTS
+from ..errors import LandmarkError
+from ..core.landmark_pairs import LandmarkPairs, pairs_from_attribute
+from ..parameters import DEFAULTS
 
 
 def optional_attribute(mesh: pymeshlab.Mesh, name: str) -> np.ndarray | None:
@@ -75,7 +75,7 @@ def read_landmark_attributes(mesh: pymeshlab.Mesh, pair_attribute: str = DEFAULT
             f"`{pair_attribute}`. Add the pairs first: "
             f"ms.current_mesh().add_vertex_custom_scalar_attribute(labels, '{pair_attribute}') with "
             "+k on the left vertex of pair k, -k on the right one and 0 elsewhere (or "
-            "filter_symblend.attributes.write_landmark_attributes), or name your attribute "
+            "filter_symblend.meshlab.attributes.write_landmark_attributes), or name your attribute "
             "with `pair_attribute`.")
     pairs = pairs_from_attribute(values, pair_attribute)
     midline_values = optional_attribute(mesh, midline_attribute)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import SymblendError
+from ..errors import SymblendError
 
 VIEWS = (("front", 2), ("top", 1), ("side", 0))  # looking along this axis of the plane frame
 

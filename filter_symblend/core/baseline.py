@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.interpolate import RBFInterpolator
 
-from .asymmetry import fit_mirror_plane
+from .landmark_asymmetry import fit_mirror_plane
 
 
 def mirror_average(points: np.ndarray, left: np.ndarray, right: np.ndarray) -> np.ndarray:

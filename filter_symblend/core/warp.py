@@ -39,7 +39,7 @@ from scipy.linalg import lu_factor, lu_solve
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
-from .mesh_geometry import farthest_point_order
+from .mesh_quantities import farthest_point_order
 from .parallel import in_threads
 
 BLOCK_ELEMENTS = 2**17  # distances per evaluation block (1 MB of float64; measured fastest of 2^15..2^22)

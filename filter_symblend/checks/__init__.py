@@ -1,0 +1,1 @@
+"""Before/after checks: landmark and surface mirror asymmetry, Hausdorff distance, pictures."""

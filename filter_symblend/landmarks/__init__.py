@@ -1,0 +1,1 @@
+"""Landmark input: file formats, pairing by name or table, snapping to vertices, curves."""

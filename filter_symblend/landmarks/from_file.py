@@ -1,0 +1,56 @@
+"""A landmark file on a mesh: read it, pair its landmarks (by name or by a pair table), trace its curves,
+snap everything to vertices. What ``symblend symmetrize -l FILE`` does, for Python users."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+
+import numpy as np
+
+from ..errors import LandmarkError
+from .curves import add_curve_pairs, find_curves
+from .files import read_landmarks
+from .pairing import LEFT_WORDS, RIGHT_WORDS, SnappedPairs, pair_by_name, read_pair_table, snap_pairs
+
+
+def pairs_from_landmark_file(points: np.ndarray, faces: np.ndarray | None, path: str | os.PathLike,
+                             pair_table: str | os.PathLike | None = None,
+                             side_words: tuple[tuple[str, ...], tuple[str, ...]] = (LEFT_WORDS, RIGHT_WORDS),
+                             midline: bool = False, curves: bool = False, curve_spacing: float | None = None,
+                             mesh_frame: str = "LPS", allow_far: bool = False) -> SnappedPairs:
+    """The landmark pairs of the file ``path`` on the mesh ``points`` (N, 3), ``faces`` (F, 3).
+
+    Landmarks pair by name (``side_words``: prefixes or suffixes that mark each side, any case) or by
+    ``pair_table`` (a two-column CSV of names or 1-based numbers); with ``midline`` the unpaired ones are
+    midline landmarks (else an error lists them); with ``curves`` numbered landmarks are curves,
+    resampled about ``curve_spacing`` apart (mesh units; default 1 % of the diagonal). Coordinates in a
+    file that states its frame (Slicer: LPS or RAS) are converted to ``mesh_frame``. Every landmark snaps
+    to its nearest vertex; one farther than 2 % of the diagonal is an error unless ``allow_far``.
+
+    Returns the snapped pairs (``.pairs`` is the :class:`LandmarkPairs` for
+    :func:`filter_symblend.symmetrize`; names, snap distances, curves and ``frame_note`` say what was
+    done).
+    """
+    if curve_spacing and not curves:
+        raise LandmarkError("`curve_spacing` spaces the semilandmarks of curves; set curves=True (--curves), or "
+                            "leave it out.")
+    source = str(path)
+    landmarks, frame_note = read_landmarks(path).in_frame(mesh_frame)
+    names = landmarks.names()
+    found_curves, singles = find_curves(names, *side_words, midline) if curves else ([], range(len(names)))
+    if pair_table:
+        index_pairs = read_pair_table(pair_table, names)
+        paired = {i for pair in index_pairs for i in pair}
+        unpaired = [i for i in singles if i not in paired]
+    else:
+        index_pairs, unpaired = pair_by_name([names[i] for i in singles], *side_words)
+        index_pairs = [(singles[a], singles[b]) for a, b in index_pairs]
+        unpaired = [singles[i] for i in unpaired]
+    points = np.asarray(points, dtype=float)
+    faces = np.zeros((0, 3), dtype=np.int64) if faces is None else np.asarray(faces)
+    snapped = snap_pairs(points, landmarks, index_pairs, unpaired, midline=midline, source=source,
+                         allow_far=allow_far)
+    snapped = add_curve_pairs(snapped, points, faces, landmarks, found_curves, curve_spacing, source,
+                              allow_far=allow_far)
+    return dataclasses.replace(snapped, frame_note=frame_note)

@@ -1,0 +1,1 @@
+"""The MeshLab side: the MeshSet filter, landmark attributes, PLY attributes, .mlx scripts."""
