@@ -490,3 +490,43 @@ def test_pairs_from_a_landmark_file_in_python_are_what_the_command_uses(bent_cow
     assert snapped.pair_names[0] == ("L_0", "R_0") and snapped.frame_note == "coordinates used as stored"
     result = symmetrize(deformed, snapped.pairs.left, snapped.pairs.right, faces=cow.faces)
     assert result.report["landmark_asymmetry_after"]["max_relative"] < 1e-9
+
+
+@pytest.mark.parametrize("mode", ["standard", "affine", "articulated"])
+def test_a_flat_mesh_is_symmetrized_in_every_mode_and_stays_flat(tmp_path, mode):
+    """A 2D shape (z = 0 everywhere, like the paper's WoodDoll) bent in its plane: every mode applies in
+    2D, the landmark pairs come out symmetric and every vertex keeps z = 0 exactly."""
+    angle = np.linspace(0, 2 * np.pi, 80, endpoint=False)
+    points, faces = synthetic.flat_region(np.c_[np.cos(angle) * (1 + 0.3 * np.cos(2 * angle)), 0.7 * np.sin(angle)],
+                                          rings=8)
+    twin = np.argmin(np.linalg.norm(points[:, None] - points[None] * [-1, 1, 1], axis=2), axis=1)
+    bent = points + np.c_[0.15 * points[:, 1] ** 2, np.zeros((len(points), 2))]
+    left = np.flatnonzero(points[:, 0] > 0.05)[::2]
+    mesh_path, landmark_path, output = tmp_path / "flat.ply", tmp_path / "flat.pp", tmp_path / "out.ply"
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=bent, face_matrix=faces))
+    ms.save_current_mesh(str(mesh_path))
+    write_landmarks(landmark_path, LandmarkSet([Landmark(f"{side}_{k}", tuple(bent[v])) for k, a in enumerate(left)
+                                                for side, v in (("L", a), ("R", twin[a]))]))
+    assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "-o", str(output), "--mode", mode]) == 0
+    ms.load_new_mesh(str(output))
+    result = ms.current_mesh().vertex_matrix()
+    assert np.all(result[:, 2] == 0.0)
+    assert synthetic.symmetry_error(result, left, twin[left]) < 1e-9
+    assert synthetic.symmetry_error(bent, left, twin[left]) > 1e-2
+
+
+def test_library_warnings_are_silenced_and_ours_are_one_line(tmp_path, capsys, monkeypatch):
+    import warnings
+
+    import filter_symblend.cli as cli
+    from filter_symblend import SymblendWarning
+
+    def noisy(args):
+        warnings.warn("overflow encountered in multiply", RuntimeWarning)
+        warnings.warn("a pair looks swapped:\n  check it", SymblendWarning)
+        return 0
+
+    monkeypatch.setattr(cli, "_convert", noisy)
+    assert main(["landmarks", "convert", str(tmp_path / "a.pp"), str(tmp_path / "b.pp")]) == 0
+    assert capsys.readouterr().err == "symblend: warning: a pair looks swapped: check it\n"
