@@ -85,10 +85,24 @@ def test_malformed_pair_labels(edit, pattern):
     run_and_expect(meshset_with_labels(points, labels), LandmarkError, pattern)
 
 
-def test_too_few_pairs():
+def test_the_minimum_is_a_plane_and_a_warp_not_a_pair_count():
     points, left, right = cube_pairs()
-    run_and_expect(meshset_with_labels(points, labels_for(16, left[:3], right[:3])), LandmarkError,
-                   r"Found 3 landmark pair\(s\) \(1, 2, 3\); the filter needs at least 4")
+    run_and_expect(meshset_with_labels(points, np.zeros(16)), LandmarkError,
+                   r"Found no landmark pair; the filter needs at least one pair")
+    with pytest.raises(GeometryError, match=r"The symmetry plane is undefined: the pairs' midpoints and the "
+                                            r"midline landmarks must span it .* and 1 pair\(s\) and 0 midline "
+                                            r"landmark\(s\) give one point. Add a pair or a midline landmark"):
+        symmetrize(points, left[:1], right[:1])
+    # Two mirror pairs always lie on one plane: the warp needs a third landmark off it ...
+    with pytest.raises(GeometryError, match=r"All landmarks \(2 pair\(s\) and 0 midline landmark\(s\)\) lie "
+                                            r"\(nearly\) on one plane.*needs 4 landmarks not on one plane"):
+        symmetrize(points, left[:2], right[:2])
+    # ... and a midline landmark off it will do: 2 pairs + 1 midline landmark are the minimum.
+    square = np.array([[1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [-1.0, 1.0, 0.0], [0.0, 0.5, 1.0]])
+    result = symmetrize(square, [0, 1], [2, 3], midline=[4])
+    assert result.report["landmark_asymmetry_after"]["max_relative"] < 1e-12
+    normal, offset = np.array(result.report["plane_normal"]), result.report["plane_offset"]
+    assert abs(result.points[4] @ normal - offset) < 1e-12
 
 
 def test_vertex_paired_with_itself():
@@ -150,7 +164,9 @@ def test_collinear_and_coplanar_landmarks():
     plane = np.array([[x, y, 0.0] for x in (1.0, 2.0) for y in (0.0, 1.0, 2.0)])
     plane = np.vstack([plane, plane * [-1, 1, 1]])
     off_the_plane = np.vstack([plane, [[0.0, 1.0, 3.0], [0.5, 0.0, -2.0]]])  # the mesh is not flat
-    with pytest.raises(GeometryError, match=r"All landmarks lie \(nearly\) on one plane, and the mesh does not; .*Add pairs off it"):
+    with pytest.raises(GeometryError, match=r"All landmarks \(6 pair\(s\) and 0 midline landmark\(s\)\) lie \(nearly\) "
+                                            r"on one plane, and the mesh does not; the 3D warp needs 4 landmarks not on "
+                                            r"one plane.*Add pairs off it"):
         symmetrize(off_the_plane, np.arange(6), np.arange(6, 12))
     result = symmetrize(plane, np.arange(6), np.arange(6, 12))  # a flat mesh: its landmarks are in its plane
     assert (result.points[:, 2] == 0.0).all()

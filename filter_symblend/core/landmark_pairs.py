@@ -15,7 +15,6 @@ from scipy.spatial import cKDTree
 from ..errors import GeometryError, LandmarkError, id_list
 from .geometry import flat_normal
 
-MIN_PAIRS = 4
 FLAT_RATIO = 1e-6  # landmark spread below this fraction of the largest one counts as flat
 
 
@@ -104,12 +103,9 @@ def check_points(points: np.ndarray) -> np.ndarray:
 
 def check_pairs(points: np.ndarray, pairs: LandmarkPairs) -> None:
     """Raise LandmarkError / GeometryError unless ``pairs`` is a usable set on ``points`` (N, 3)."""
-    n = len(pairs.ids)
-    if n < MIN_PAIRS:
-        raise LandmarkError(
-            f"Found {n} landmark pair(s){' (' + ', '.join(map(str, pairs.ids)) + ')' if n else ''}; "
-            f"the filter needs at least {MIN_PAIRS} pairs, not all on one plane. Add pairs."
-        )
+    if len(pairs.ids) == 0:
+        raise LandmarkError("Found no landmark pair; the filter needs at least one pair (two mirror-image "
+                            "landmarks) besides any midline landmarks. Add pairs.")
     for side, ids in ((pairs.left, pairs.ids), (pairs.right, pairs.ids),
                       (pairs.midline, midline_labels(len(pairs.midline)))):
         outside = (side < 0) | (side >= len(points))
@@ -148,14 +144,42 @@ def check_pairs(points: np.ndarray, pairs: LandmarkPairs) -> None:
             "Merge duplicate vertices (meshing_remove_duplicate_vertices) or move one "
             "landmark; a landmark on the symmetry plane is not a pair."
         )
-    spread = np.linalg.svd(positions - positions.mean(axis=0), compute_uv=False)
-    if spread[1] <= FLAT_RATIO * spread[0]:
+    _require_plane_and_warp(points, pairs)
+
+
+def _spread(positions: np.ndarray) -> np.ndarray:
+    """Singular values (3,) of ``positions`` (k, 3) about their mean (zeros where k is too small)."""
+    values = np.linalg.svd(positions - positions.mean(axis=0), compute_uv=False)
+    return np.concatenate([values, np.zeros(3 - len(values))])
+
+
+def _require_plane_and_warp(points: np.ndarray, pairs: LandmarkPairs) -> None:
+    """What the mathematics needs, whatever the counts: a symmetry plane (the pair midpoints and the
+    midline landmarks span it: 3 points not on one line, or a line across the pairs' direction) and a warp
+    (4 landmarks not on one plane in all; 3 not on one line on a flat mesh). Any two mirror pairs lie on
+    one plane, so the warp needs a third pair or a midline landmark off it."""
+    on_plane = np.vstack([0.5 * (points[pairs.left] + points[pairs.right]), points[pairs.midline]])
+    plane = _spread(on_plane)
+    counts = f"{len(pairs.ids)} pair(s) and {len(pairs.midline)} midline landmark(s)"
+    spanned = plane[1] > FLAT_RATIO * plane[0]
+    if not spanned and plane[0] > 0:  # a line: the plane holds it and is normal to the pairs' direction
+        line = np.linalg.svd(on_plane - on_plane.mean(axis=0), full_matrices=False)[2][0]
+        across = points[pairs.left] - points[pairs.right]
+        spanned = bool((np.abs(across @ line) < (1 - FLAT_RATIO) * np.linalg.norm(across, axis=1)).any())
+    if not spanned:
+        found = "one point" if plane[0] == 0 else "points on one line along the pairs"
+        raise GeometryError(
+            f"The symmetry plane is undefined: the pairs' midpoints and the midline landmarks must span it (3 "
+            f"points not on one line, or a line across the pairs), and {counts} give {found}. Add a pair or a "
+            "midline landmark (--midline) off that line.")
+    every = _spread(points[np.concatenate([pairs.left, pairs.right, pairs.midline])])
+    if every[1] <= FLAT_RATIO * every[0]:
         raise GeometryError(
             "All landmarks lie (nearly) on one line; the symmetry plane and the warp are "
             "undefined. Add pairs away from that line."
         )
-    if spread[2] <= FLAT_RATIO * spread[0] and flat_normal(points) is None:
+    if every[2] <= FLAT_RATIO * every[0] and flat_normal(points) is None:
         raise GeometryError(
-            "All landmarks lie (nearly) on one plane, and the mesh does not; the 3D warp is undefined "
-            "off that plane. Add pairs off it."
+            f"All landmarks ({counts}) lie (nearly) on one plane, and the mesh does not; the 3D warp needs 4 "
+            "landmarks not on one plane, and is undefined off that plane. Add pairs off it."
         )
