@@ -46,7 +46,8 @@ def _add_filter_options(parser: argparse.ArgumentParser) -> None:
 
 def _add_landmark_options(parser: argparse.ArgumentParser, required: bool = True, note: str = "") -> None:
     parser.add_argument("-l", "--landmarks", required=required, type=pathlib.Path,
-                        help="landmark file: .pp, .fcsv, .mrk.json, .pts or .csv" + note)
+                        help="landmark file: .pp, .fcsv, .mrk.json, .pts, .csv or .tps" + note)
+    _add_specimen_option(parser)
     parser.add_argument("--pair-table", type=pathlib.Path,
                         help="pair table: two-column CSV of landmark names or 1-based numbers (left, right); "
                              "default: pair by name (L_/R_ prefixes, _left/_right suffixes, any case)")
@@ -70,6 +71,12 @@ def _add_landmark_options(parser: argparse.ArgumentParser, required: bool = True
     parser.add_argument("--allow-far-landmarks", action="store_true",
                         help="snap landmarks that lie farther than 2%% of the diagonal from the surface "
                              "(without it they are an error: a wrong coordinate system or unit is likelier)")
+
+
+def _add_specimen_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--specimen", metavar="ID|INDEX",
+                        help="the specimen of a .tps file with several (its ID= or a 1-based index); default the "
+                             "first, with a warning")
 
 
 def _positive_length(text: str) -> float:
@@ -119,7 +126,7 @@ def _snapped_pairs(ms, args):
     snapped = pairs_from_landmark_file(
         mesh.vertex_matrix(), mesh.face_matrix(), args.landmarks, args.pair_table,
         (tuple(left_words.split(",")), tuple(right_words.split(","))), args.midline, args.curves,
-        args.curve_spacing, args.mesh_frame, args.allow_far_landmarks)
+        args.curve_spacing, args.mesh_frame, args.allow_far_landmarks, args.specimen)
     return snapped
 
 
@@ -327,7 +334,7 @@ def _convert(args) -> int:
     from .landmarks.files import read_landmarks, write_landmarks
 
     _check_outputs(args, {"landmark file": args.output}, [args.input])
-    write_landmarks(args.output, read_landmarks(args.input))
+    write_landmarks(args.output, read_landmarks(args.input, args.specimen))
     print(f"{args.input} -> {args.output}")
     return 0
 
@@ -388,9 +395,10 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("input", type=pathlib.Path, help="mesh file")
     _add_landmark_options(check)
     check.set_defaults(handler=_check)
-    convert = sub.add_parser("convert", help="convert between .pp, .fcsv, .mrk.json, .pts, .csv")
+    convert = sub.add_parser("convert", help="convert between .pp, .fcsv, .mrk.json, .pts, .csv, .tps")
     convert.add_argument("input", type=pathlib.Path)
     convert.add_argument("output", type=pathlib.Path)
+    _add_specimen_option(convert)
     convert.set_defaults(handler=_convert)
     return parser
 

@@ -530,3 +530,30 @@ def test_library_warnings_are_silenced_and_ours_are_one_line(tmp_path, capsys, m
     monkeypatch.setattr(cli, "_convert", noisy)
     assert main(["landmarks", "convert", str(tmp_path / "a.pp"), str(tmp_path / "b.pp")]) == 0
     assert capsys.readouterr().err == "symblend: warning: a pair looks swapped: check it\n"
+
+
+def test_a_tps_study_with_three_pairs_and_midline_landmarks(tmp_path, cow, capsys):
+    """Morpho's own example's shape: 3 pairs and 4 midline landmarks, from the second specimen of a .tps
+    file, paired by number through a pair table."""
+    left, right = cow.landmarks(3)
+    on_plane = np.flatnonzero(np.abs(cow.points[:, 0] - cow.offset) < 1e-12)
+    midline = on_plane[np.argsort(cow.points[on_plane, 1])][np.linspace(0, len(on_plane) - 1, 4).astype(int)]
+    bent = synthetic.bend(cow.points, 0.3)
+    mesh_path, tps, table, output = (tmp_path / name for name in ("cow.obj", "study.tps", "pairs.csv", "out.ply"))
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=bent, face_matrix=cow.faces))
+    ms.save_current_mesh(str(mesh_path))
+    order = [left[0], right[0], left[1], right[1], left[2], right[2], *midline]
+    rows = "".join(" ".join(repr(float(v)) for v in bent[i] * 10) + "\n" for i in order)  # in mm: SCALE=0.1
+    tps.write_text(f"LM3=1\n0 0 0\nID=other\nLM3={len(order)}\n{rows}ID=specimen-2\nSCALE=0.1\n")
+    table.write_text("left,right\n1,2\n3,4\n5,6\n")
+    arguments = ["symmetrize", str(mesh_path), "-l", str(tps), "--specimen", "specimen-2", "--pair-table",
+                 str(table), "--midline", "-o", str(output), "--report", str(tmp_path / "r.json")]
+    assert main(arguments) == 0
+    data = json.loads((tmp_path / "r.json").read_text())
+    assert data["pair_count"] == 3 and data["midline_count"] == 4 and data["landmarks"]["snap_distance_max"] < 1e-9
+    assert data["landmark_asymmetry_after"]["max_relative"] < 1e-9
+    assert main(["landmarks", "convert", str(tps), str(tmp_path / "second.pp"), "--specimen", "2"]) == 0
+    assert read_landmarks(tmp_path / "second.pp").names()[:2] == ["1", "2"]
+    assert main(["landmarks", "check", str(mesh_path), "-l", str(tps), "--pair-table", str(table), "--midline"]) == 1
+    assert "holds 2 specimens (other, specimen-2); the first (other) is used" in capsys.readouterr().err

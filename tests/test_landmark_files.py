@@ -2,6 +2,8 @@
 
 import pytest
 
+from filter_symblend import SymblendWarning
+
 from filter_symblend.landmarks.files import (FORMATS, Landmark, LandmarkFileError, LandmarkSet, read_landmarks,
                                             write_landmarks)
 
@@ -18,7 +20,8 @@ def test_round_trip(tmp_path, suffix):
     path = tmp_path / f"points{suffix}"
     write_landmarks(path, SAMPLE)
     back = read_landmarks(path)
-    assert back.names() == SAMPLE.names()
+    # TPS names landmarks by number (pair tables by number work)
+    assert back.names() == (["1", "2", "3", "4"] if suffix == ".tps" else SAMPLE.names())
     assert [lm.placed for lm in back.landmarks] == [True, True, True, False]
     for a, b in zip(back.landmarks[:3], SAMPLE.landmarks[:3]):
         assert a.position == b.position
@@ -133,3 +136,87 @@ def test_an_fcsv_without_a_z_column_says_so(tmp_path):
                     "# columns = id,x,y,ow,ox,oy,oz,vis,sel,lock,label\nvtkMRML_1,1,2,0,0,0,1,1,1,0,L_a\n")
     with pytest.raises(LandmarkFileError, match=r"no_z.fcsv, line 3: the columns header has no z column"):
         read_landmarks(path)
+
+
+TPS_STUDY = """LM3=3
+1.0 2.0 3.0
+-1.0 2.0 3.0
+0.0 4.0 NA
+IMAGE=skull_A.ply
+ID=UCMP-123
+SCALE=0.5
+COMMENT=field season 2019
+LM3=3
+2.0 2.0 3.0
+-2.0 2.0 3.0
+0.0 5.0 1.0
+CURVES=1
+POINTS=2
+0.1 0.2 0.3
+0.4 0.5 0.6
+ID=UCMP-124
+"""
+
+
+def test_a_tps_study_one_specimen_chosen_by_id_or_index_scaled(tmp_path):
+    path = tmp_path / "study.tps"
+    path.write_text(TPS_STUDY)
+    with pytest.warns(SymblendWarning, match=r"holds 2 specimens \(UCMP-123, UCMP-124\); the first \(UCMP-123\) is "
+                                             r"used. Choose one with --specimen"):
+        first = read_landmarks(path)
+    assert first.names() == ["1", "2", "3"]
+    assert first.landmarks[0].position == (0.5, 1.0, 1.5)  # SCALE=0.5 applied
+    assert [lm.placed for lm in first.landmarks] == [True, True, False]  # NA: not placed
+    second = read_landmarks(path, "UCMP-124")
+    assert second.landmarks[2].position == (0.0, 5.0, 1.0)  # no SCALE line: 1
+    assert read_landmarks(path, 2).landmarks == second.landmarks
+    with pytest.raises(LandmarkFileError, match=r"study.tps: no specimen 'UCMP-9'; its specimens are UCMP-123, "
+                                                r"UCMP-124 \(by ID, or by index 1..2\)"):
+        read_landmarks(path, "UCMP-9")
+
+
+@pytest.mark.parametrize("text, message", [
+    ("LM=2\n1 2\n3 4\nID=a\n", r"line 1: LM= holds 2D landmarks; the filter needs 3D ones \(LM3=\)"),
+    ("LM3=3\n1 2 3\n4 5\n", r"line 3: LM3=3 needs 3 lines of x y z \(landmark 2 has 2 values\)"),
+    ("LM3=three\n", r"line 1: LM3='three' is not a count"),
+    ("ID=a\n", r"no LM3= block"),
+    ("LM3=1\n1 2 3\nSCALE=-2\n", r"line 3: SCALE=-2 must be positive"),
+])
+def test_tps_errors(tmp_path, text, message):
+    path = tmp_path / "bad.tps"
+    path.write_text(text)
+    with pytest.raises(LandmarkFileError, match=message):
+        read_landmarks(path)
+
+
+def test_a_specimen_is_only_for_tps(tmp_path):
+    path = tmp_path / "points.csv"
+    write_landmarks(path, SAMPLE)
+    with pytest.raises(LandmarkFileError, match=r"--specimen chooses a specimen of a .tps file"):
+        read_landmarks(path, "1")
+
+
+@pytest.mark.parametrize("missing", ["NA", "-999", "9999", "nan"])
+@pytest.mark.parametrize("suffix, template", [
+    (".csv", "name,x,y,z\nL_a,1,2,3\nR_a,{m},{m},{m}\n"),
+    (".pts", "Version 1.0\n2\nL_a 1 2 3\nR_a {m} {m} {m}\n"),
+    (".pp", '<!DOCTYPE PickedPoints>\n<PickedPoints><point x="1" y="2" z="3" name="L_a"/>'
+            '<point x="{m}" y="{m}" z="{m}" name="R_a"/></PickedPoints>\n'),
+    (".tps", "LM3=2\n1 2 3\n{m} {m} {m}\n"),
+])
+def test_missing_landmarks_as_the_field_writes_them(tmp_path, suffix, template, missing):
+    path = tmp_path / f"points{suffix}"
+    path.write_text(template.format(m=missing))
+    assert [lm.placed for lm in read_landmarks(path).landmarks] == [True, False]
+
+
+def test_a_whole_study_written_as_one_tps_file_reads_back_by_id(tmp_path):
+    from filter_symblend.landmarks.files import write_tps_study
+    path = tmp_path / "study.tps"
+    second = LandmarkSet([Landmark("a", (1.0, 2.0, 3.0)), Landmark("b", (0.0, 0.0, 0.0), placed=False)])
+    write_tps_study(path, {"skull-1": SAMPLE, "skull-2": second})
+    back = read_landmarks(path, "skull-2")
+    assert [lm.position for lm in back.landmarks][:1] == [(1.0, 2.0, 3.0)]
+    assert [lm.placed for lm in back.landmarks] == [True, False]
+    assert [lm.position for lm in read_landmarks(path, 1).landmarks][:3] == [lm.position for lm in SAMPLE.landmarks[:3]]
+    assert path.read_text().count("LM3=") == 2 and "NA NA NA" in path.read_text()

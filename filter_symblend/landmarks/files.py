@@ -7,6 +7,14 @@
 | .mrk.json   | 3D Slicer / SlicerMorph      | positionStatus != "defined"      | LPS or RAS |
 | .pts        | IDAV Landmark Editor         | a coordinate of 9999             | mesh       |
 | .csv        | spreadsheet: name, x, y, z   | an empty coordinate              | mesh       |
+| .tps        | Rohlf's TPS (LM3= blocks;    | a coordinate NA, -999 or 9999    | mesh       |
+|             | geomorph, Morpho, MorphoJ)   |                                  |            |
+
+In every format a coordinate written NA, NaN, -999 or 9999 (as morphometric
+software writes a missing landmark) marks the landmark as not placed. A .tps
+file may hold several specimens: one is chosen by ID or 1-based index
+(default the first, with a warning naming the others); its landmarks are named
+by number, 1..k, so pair tables by number work; SCALE= is applied.
 
 ``coordinate_system`` is "LPS", "RAS" or None (the mesh's own frame). Slicer
 writes "# CoordinateSystem = 0" (RAS) or "= 1" (LPS) in old .fcsv files.
@@ -20,11 +28,13 @@ import io
 import json
 import math
 import pathlib
+import warnings
 import xml.etree.ElementTree as ElementTree
 
-from ..errors import SymblendError
+from ..errors import SymblendError, SymblendWarning
 
 MISSING_PTS_VALUE = 9999.0
+MISSING_WORDS = {"na", "nan", "-999", "-999.0", "9999", "9999.0"}  # a missing coordinate, as the field writes it
 OLD_FCSV_SYSTEMS = {"0": "RAS", "1": "LPS"}
 
 
@@ -59,6 +69,18 @@ class LandmarkSet:
                 f"coordinates converted from {self.coordinate_system} to {frame} (x and y negated)")
 
 
+def _missing(text) -> bool:
+    """Whether a coordinate's text marks a missing landmark (NA, NaN, -999, 9999)."""
+    return text is not None and str(text).strip().lower() in MISSING_WORDS
+
+
+def _position(texts, where: str) -> tuple[tuple[float, float, float], bool]:
+    """(x, y, z) and whether the landmark is placed, from three coordinate texts (missing: zeros, False)."""
+    if any(_missing(t) for t in texts):
+        return (0.0, 0.0, 0.0), False
+    return tuple(_number(t, where) for t in texts), True
+
+
 def _number(text: str, where: str) -> float:
     try:
         value = float(text)
@@ -77,9 +99,9 @@ def _read_pp(text: str, path: str) -> LandmarkSet:
     landmarks = []
     for index, point in enumerate(root.iter("point"), start=1):
         where = f"{path}, point {index} ({point.get('name', '?')})"
-        position = tuple(_number(point.get(axis), where) for axis in "xyz")
+        position, placed = _position([point.get(axis) for axis in "xyz"], where)
         landmarks.append(Landmark(point.get("name", f"point_{index}"), position,
-                                  point.get("active", "1") != "0"))
+                                  placed and point.get("active", "1") != "0"))
     return LandmarkSet(landmarks)
 
 
@@ -119,10 +141,10 @@ def _read_fcsv(text: str, path: str) -> LandmarkSet:
         names = columns or ["id", "x", "y", "z", "ow", "ox", "oy", "oz", "vis", "sel", "lock", "label"]
         record = dict(zip(names, row))
         where = f"{path}, line {number}"
-        position = tuple(_number(record.get(axis), where) for axis in "xyz")
+        position, placed = _position([record.get(axis) for axis in "xyz"], where)
         status = next((v for k, v in record.items() if "status" in k.lower()), "defined")
         landmarks.append(Landmark(record.get("label") or f"F-{len(landmarks) + 1}", position,
-                                  status.strip().lower() in ("", "defined")))
+                                  placed and status.strip().lower() in ("", "defined")))
     return LandmarkSet(landmarks, system or "LPS")
 
 
@@ -183,9 +205,9 @@ def _read_pts(text: str, path: str) -> LandmarkSet:
     for number, fields in enumerate(lines, start=1):
         if len(fields) < 4:
             raise LandmarkFileError(f"{path}, point {number}: expected 'name x y z', got {' '.join(fields)!r}.")
-        position = tuple(_number(v, f"{path}, point {number} ({fields[0]})") for v in fields[-3:])
+        position, placed = _position(fields[-3:], f"{path}, point {number} ({fields[0]})")
         name = " ".join(fields[:-3])
-        landmarks.append(Landmark(name, position, MISSING_PTS_VALUE not in position))
+        landmarks.append(Landmark(name, position, placed))
     return LandmarkSet(landmarks)
 
 
@@ -210,7 +232,7 @@ def _read_csv(text: str, path: str) -> LandmarkSet:
         cells = dict(zip(header, row))
         placed = all(cells.get(axis, "").strip() for axis in "xyz")
         where = f"{path}, line {number}"
-        position = tuple(_number(cells[axis], where) if placed else 0.0 for axis in "xyz")
+        position, placed = _position([cells[axis] for axis in "xyz"], where) if placed else ((0.0, 0.0, 0.0), False)
         landmarks.append(Landmark(row[name_column].strip(), position, placed))
     return LandmarkSet(landmarks)
 
@@ -224,12 +246,103 @@ def _write_csv(landmarks: LandmarkSet) -> str:
     return out.getvalue()
 
 
+@dataclasses.dataclass
+class _Specimen:
+    rows: list[list[str]]  # coordinate texts per landmark
+    line: int  # line of its LM3= line
+    identifier: str | None = None
+    scale: float = 1.0
+
+
+def _tps_specimens(text: str, path: str) -> list[_Specimen]:
+    """The specimens of a TPS file, in order; 2D files (LM=) are refused."""
+    specimens, lines, number = [], text.splitlines(), 0
+    while number < len(lines):
+        line = lines[number].strip()
+        number += 1
+        key, _, value = line.partition("=")
+        key = key.strip().upper()
+        if key == "LM":
+            raise LandmarkFileError(f"{path}, line {number}: LM= holds 2D landmarks; the filter needs 3D ones "
+                                    "(LM3=). Digitize them on the 3D mesh, or export LM3 from your software.")
+        if key == "LM3":
+            try:
+                count = int(value)
+            except ValueError:
+                raise LandmarkFileError(f"{path}, line {number}: LM3={value.strip()!r} is not a count.") from None
+            rows = [lines[i].split() for i in range(number, number + count) if i < len(lines)]
+            if len(rows) < count or any(len(row) != 3 for row in rows):
+                bad = next((i for i, row in enumerate(rows) if len(row) != 3), len(rows))
+                raise LandmarkFileError(f"{path}, line {number + bad + 1}: LM3={count} needs {count} lines of x y z "
+                                        f"(landmark {bad + 1} has {len(rows[bad]) if bad < len(rows) else 'no'} "
+                                        "values).")
+            specimens.append(_Specimen(rows, number))
+            number += count
+        elif key == "POINTS":  # the points of a curve (2D outlines): skipped
+            number += int(value)
+        elif key == "ID" and specimens:
+            specimens[-1].identifier = value.strip()
+        elif key == "SCALE" and specimens:
+            scale = _number(value, f"{path}, line {number} (SCALE)")
+            if scale <= 0:
+                raise LandmarkFileError(f"{path}, line {number}: SCALE={value.strip()} must be positive.")
+            specimens[-1].scale = scale
+    return specimens
+
+
+def _chosen(specimens: list[_Specimen], path: str, specimen: str | int | None) -> _Specimen:
+    if not specimens:
+        raise LandmarkFileError(f"{path}: no LM3= block; a TPS file of 3D landmarks starts each specimen with "
+                                "LM3=<count>.")
+    names = [s.identifier or str(i) for i, s in enumerate(specimens, start=1)]
+    if specimen is None:
+        if len(specimens) > 1:
+            warnings.warn(f"{path} holds {len(specimens)} specimens ({', '.join(names[:10])}"
+                          f"{', ...' if len(names) > 10 else ''}); the first ({names[0]}) is used. Choose one with "
+                          "--specimen ID or INDEX.", SymblendWarning, stacklevel=4)
+        return specimens[0]
+    text = str(specimen).strip()
+    for index, candidate in enumerate(specimens, start=1):
+        if candidate.identifier == text:
+            return candidate
+    if text.isdigit() and 1 <= int(text) <= len(specimens):
+        return specimens[int(text) - 1]
+    raise LandmarkFileError(f"{path}: no specimen {text!r}; its specimens are {', '.join(names[:20])} "
+                            f"(by ID, or by index 1..{len(specimens)}).")
+
+
+def read_tps(text: str, path: str, specimen: str | int | None = None) -> LandmarkSet:
+    """One specimen of a TPS file (see the module docstring): landmarks named 1..k, SCALE applied."""
+    chosen = _chosen(_tps_specimens(text, path), path, specimen)
+    landmarks = []
+    for index, row in enumerate(chosen.rows, start=1):
+        position, placed = _position(row, f"{path}, line {chosen.line + index}")
+        landmarks.append(Landmark(str(index), tuple(chosen.scale * v for v in position), placed))
+    return LandmarkSet(landmarks)
+
+
+def _write_tps(landmarks: LandmarkSet, identifier: str = "specimen") -> str:
+    rows = [" ".join(repr(float(v)) for v in lm.position) if lm.placed else "NA NA NA" for lm in landmarks.landmarks]
+    return f"LM3={len(rows)}\n" + "".join(row + "\n" for row in rows) + f"ID={identifier}\n"
+
+
+def write_tps_study(path, specimens: dict[str, LandmarkSet]) -> None:
+    """Several specimens (ID -> landmarks) in one TPS file, as geomorph's readland.tps and Morpho's
+    readallTPS read them (missing coordinates as NA)."""
+    text = "".join(_write_tps(landmarks, identifier) for identifier, landmarks in specimens.items())
+    path = pathlib.Path(path)
+    temporary = path.with_name(path.name + ".partial")
+    temporary.write_text(text, encoding="utf-8")
+    temporary.replace(path)
+
+
 FORMATS = {
     ".pp": (_read_pp, _write_pp),
     ".fcsv": (_read_fcsv, _write_fcsv),
     ".mrk.json": (_read_mrk_json, _write_mrk_json),
     ".pts": (_read_pts, _write_pts),
     ".csv": (_read_csv, _write_csv),
+    ".tps": (read_tps, _write_tps),
 }
 
 
@@ -241,15 +354,21 @@ def _format_of(path: pathlib.Path) -> str:
     raise LandmarkFileError(f"{path}: unknown landmark format; use one of {', '.join(sorted(FORMATS))}.")
 
 
-def read_landmarks(path) -> LandmarkSet:
-    """Read a landmark file; the format comes from the suffix (see the module table)."""
+def read_landmarks(path, specimen: str | int | None = None) -> LandmarkSet:
+    """Read a landmark file; the format comes from the suffix (see the module table). ``specimen`` (an ID
+    or a 1-based index) chooses one specimen of a .tps file."""
     path = pathlib.Path(path)
-    reader = FORMATS[_format_of(path)][0]
+    suffix = _format_of(path)
+    if specimen is not None and suffix != ".tps":
+        raise LandmarkFileError(f"{path}: --specimen chooses a specimen of a .tps file; this file holds one "
+                                "set of landmarks. Leave it out.")
     try:
         text = path.read_text(encoding="utf-8-sig")
     except OSError as error:
         raise LandmarkFileError(f"{path}: cannot be read ({error.strerror}).") from None
-    return reader(text, str(path))
+    if suffix == ".tps":
+        return read_tps(text, str(path), specimen)
+    return FORMATS[suffix][0](text, str(path))
 
 
 def write_landmarks(path, landmarks: LandmarkSet) -> None:

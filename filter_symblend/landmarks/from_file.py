@@ -18,7 +18,8 @@ def pairs_from_landmark_file(points: np.ndarray, faces: np.ndarray | None, path:
                              pair_table: str | os.PathLike | None = None,
                              side_words: tuple[tuple[str, ...], tuple[str, ...]] = (LEFT_WORDS, RIGHT_WORDS),
                              midline: bool = False, curves: bool = False, curve_spacing: float | None = None,
-                             mesh_frame: str = "LPS", allow_far: bool = False) -> SnappedPairs:
+                             mesh_frame: str = "LPS", allow_far: bool = False,
+                             specimen: str | int | None = None) -> SnappedPairs:
     """The landmark pairs of the file ``path`` on the mesh ``points`` (N, 3), ``faces`` (F, 3).
 
     Landmarks pair by name (``side_words``: prefixes or suffixes that mark each side, any case) or by
@@ -27,6 +28,7 @@ def pairs_from_landmark_file(points: np.ndarray, faces: np.ndarray | None, path:
     resampled about ``curve_spacing`` apart (mesh units; default 1 % of the diagonal). Coordinates in a
     file that states its frame (Slicer: LPS or RAS) are converted to ``mesh_frame``. Every landmark snaps
     to its nearest vertex; one farther than 2 % of the diagonal is an error unless ``allow_far``.
+    ``specimen`` (ID or 1-based index) chooses one specimen of a .tps file.
 
     Returns the snapped pairs (``.pairs`` is the :class:`LandmarkPairs` for
     :func:`filter_symblend.symmetrize`; names, snap distances, curves and ``frame_note`` say what was
@@ -36,7 +38,7 @@ def pairs_from_landmark_file(points: np.ndarray, faces: np.ndarray | None, path:
         raise LandmarkError("`curve_spacing` spaces the semilandmarks of curves; set curves=True (--curves), or "
                             "leave it out.")
     source = str(path)
-    landmarks, frame_note = read_landmarks(path).in_frame(mesh_frame)
+    landmarks, frame_note = read_landmarks(path, specimen).in_frame(mesh_frame)
     names = landmarks.names()
     found_curves, singles = find_curves(names, *side_words, midline) if curves else ([], range(len(names)))
     if pair_table:
