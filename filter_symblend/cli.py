@@ -187,7 +187,11 @@ def _write_landmarks(ms, args, names: dict) -> dict:
     return {"file": str(args.landmarks), "frame": snapped.frame_note, "pairs": [list(p) for p in snapped.pair_names],
             "midline": snapped.midline_names, "curves": snapped.curves,
             "placed_point_spacing": snapped.placed_spacing, "missing": missing,
-            "snap_distance_max": float(snapped.snap_distances.max()), "left_out_unplaced": snapped.unplaced}
+            "snap_distance_max": float(snapped.snap_distances.max()), "left_out_unplaced": snapped.unplaced,
+            "vertices": [[name, int(vertex)] for names, vertices in (
+                ([a for a, _ in snapped.pair_names], snapped.pairs.left),
+                ([b for _, b in snapped.pair_names], snapped.pairs.right),
+                (snapped.midline_names, snapped.pairs.midline)) for name, vertex in zip(names, vertices)]}
 
 
 def _write_report(path, report) -> None:
@@ -211,7 +215,9 @@ def _jsonable(value):
     raise TypeError(f"{type(value).__name__} is not JSON serializable")
 
 
-def _symmetrize(args) -> int:
+def symmetrize_files(args, progress=None):
+    """``symblend symmetrize`` without its printout, for one parsed command line ``args``: every check,
+    then the filter, the output mesh and the report written. Returns (report, the MeshSet)."""
     from .meshlab.meshset_filter import generate_symmetrized_mesh
 
     params = {p.name: getattr(args, p.name) for p in PARAMETERS}
@@ -226,10 +232,15 @@ def _symmetrize(args) -> int:
     landmarks = None if automatic else _write_landmarks(ms, args, params)
     if landmarks and landmarks["curves"] and not params["width_spacing"]:
         params["width_spacing"] = landmarks["placed_point_spacing"]  # semilandmarks leave the widths as they were
-    report = generate_symmetrized_mesh(ms, _progress_display(), **params)
+    report = generate_symmetrized_mesh(ms, progress, **params)
     report["landmarks"] = landmarks
     _save_atomically(ms, args.output)
     _write_report(args.report, report)
+    return report, ms
+
+
+def _symmetrize(args) -> int:
+    report, _ = symmetrize_files(args, _progress_display())
     pairs = f"{report['pair_count']} landmark pairs"
     if "auto_pairs" in report:
         automatic_pairs = report["auto_pairs"]
@@ -275,6 +286,28 @@ def _mlx(args) -> int:
     _write_report(args.report, {"script": str(args.script), "landmarks": landmarks, "steps": steps})
     print(f"{args.output}: {len(steps)} filters of {args.script} applied")
     return 0
+
+
+def _batch(args) -> int:
+    from .batch import OUTPUT_OPTIONS, run
+
+    if args.workers is not None and args.workers < 1:
+        raise SymblendError(f"--workers {args.workers}: give 1 or more processes.")
+    defaults = []  # the options given on the command line, as words of symblend symmetrize
+    for action in args.parser._actions:
+        if not action.option_strings or action.dest in (*OUTPUT_OPTIONS, "manifest", "workers", "scheduler", "force"):
+            continue
+        value = getattr(args, action.dest)
+        if value == action.default or value is None:
+            continue
+        defaults += [action.option_strings[-1]] if action.nargs == 0 else [action.option_strings[-1], str(value)]
+    summaries = run(args.manifest, args.output, defaults, args.workers, args.scheduler, args.force,
+                    progress=sys.stderr.isatty())
+    failed = [s for s in summaries if s["status"] == "failed"]
+    print(f"{args.output}: {len(summaries) - len(failed)} of {len(summaries)} specimens symmetrized"
+          + (f", {sum(s['status'] == 'done before' for s in summaries)} of them done before" if not args.force else "")
+          + (f"; {len(failed)} failed (see summary.csv)" if failed else ""))
+    return 1 if failed else 0
 
 
 def _report(args) -> int:
@@ -346,6 +379,32 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see: {self.prog} --help)\n")
 
 
+class _RaisingParser(_Parser):
+    """The same options, whose usage errors raise SymblendError (a batch row's options)."""
+
+    def error(self, message: str):
+        raise SymblendError(message)
+
+
+def symmetrize_arguments(argv: list[str]) -> argparse.Namespace:
+    """``argv`` (the words after ``symblend symmetrize``) parsed as that command does; bad options raise
+    SymblendError."""
+    parser = _RaisingParser(prog="symblend symmetrize")
+    _add_symmetrize_arguments(parser)
+    return parser.parse_args(argv)
+
+
+def _add_symmetrize_arguments(run: argparse.ArgumentParser) -> None:
+    run.add_argument("input", type=pathlib.Path, help="mesh file (any format pymeshlab reads)")
+    _add_landmark_options(run, required=False, note=" (not with --pairs auto)")
+    run.add_argument("-o", "--output", required=True, type=pathlib.Path,
+                     help="output mesh; .ply keeps quality (local asymmetry) and the attributes")
+    run.add_argument("--report", type=pathlib.Path, help="write the filter's report as JSON")
+    run.add_argument("--overwrite", action="store_true", help="allow -o to name the input mesh (replaced at the end)")
+    _add_missing_option(run)
+    _add_filter_options(run)
+
+
 def build_parser() -> argparse.ArgumentParser:
     from importlib.metadata import PackageNotFoundError, version
 
@@ -357,15 +416,24 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"symblend (filter-symblend) {installed}")
     commands = parser.add_subparsers(dest="command", required=True)
     run = commands.add_parser("symmetrize", help="symmetrize a mesh from landmark pairs or automatic pairs")
-    run.add_argument("input", type=pathlib.Path, help="mesh file (any format pymeshlab reads)")
-    _add_landmark_options(run, required=False, note=" (not with --pairs auto)")
-    run.add_argument("-o", "--output", required=True, type=pathlib.Path,
-                     help="output mesh; .ply keeps quality (local asymmetry) and the attributes")
-    run.add_argument("--report", type=pathlib.Path, help="write the filter's report as JSON")
-    run.add_argument("--overwrite", action="store_true", help="allow -o to name the input mesh (replaced at the end)")
-    _add_missing_option(run)
-    _add_filter_options(run)
+    _add_symmetrize_arguments(run)
     run.set_defaults(handler=_symmetrize)
+
+    batch = commands.add_parser("batch", help="symmetrize every specimen of a manifest CSV (a study), locally or "
+                                              "on a Dask cluster")
+    batch.add_argument("manifest", type=pathlib.Path,
+                       help="CSV with a header: mesh, optionally landmarks and any symmetrize option per row")
+    batch.add_argument("-o", "--output", required=True, type=pathlib.Path, metavar="OUTDIR",
+                       help="folder for <mesh stem>.ply/.json, summary.csv and landmarks.tps")
+    batch.add_argument("--workers", type=int, default=None, metavar="N",
+                       help="local processes (default: the cores), BLAS at one thread each")
+    batch.add_argument("--scheduler", metavar="ADDRESS",
+                       help="run on the Dask cluster at ADDRESS (tcp://host:8786); needs filter-symblend[cluster]")
+    batch.add_argument("--force", action="store_true", help="redo rows whose outputs are newer than their inputs")
+    _add_landmark_options(batch, required=False, note=" (default for rows without a landmarks column)")
+    _add_missing_option(batch)
+    _add_filter_options(batch)
+    batch.set_defaults(handler=_batch, parser=batch)
 
     script = commands.add_parser("mlx", help="run a MeshLab filter script (.mlx) that may use our filter")
     script.add_argument("script", type=pathlib.Path, help="filter script (.mlx), e.g. one of mlx_presets/")

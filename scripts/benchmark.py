@@ -18,6 +18,8 @@ Seconds are the filter's own stage timings (median of --repeat runs).
                                              # samples, as given and deformed; synthetic meshes as they come
     python scripts/benchmark.py --filter     # what the user runs: the MeshSet filter against its core, and
                                              # `symblend report`, each in its own process (time, peak RSS)
+    python scripts/benchmark.py --batch      # `symblend batch` on 16 specimens of about 30k vertices: 1 and 2
+                                             # local workers, and a local Dask cluster
 """
 
 from __future__ import annotations
@@ -641,6 +643,69 @@ def filter_main() -> None:
             print(f"| {name} | {vertices.current_mesh().vertex_number():,} | {seconds:.1f} | {rss:.0f} |", flush=True)
 
 
+BATCH_SPECIMENS = 16
+BATCH_PAIRS = 100
+
+
+def _batch_study(folder: pathlib.Path) -> pathlib.Path:
+    """16 copies of the cow midpoint-subdivided twice (46k vertices), each bent by its own angle and posed, with 100
+    landmark pairs: the manifest."""
+    from filter_symblend.landmarks.files import Landmark, LandmarkSet, write_landmarks
+
+    *_, (points, offset, partner) = subdivided_cows(2)
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(MESHES["cow"]))
+    ms.meshing_surface_subdivision_midpoint(iterations=2, threshold=pymeshlab.PercentageValue(0))
+    faces = ms.current_mesh().face_matrix()
+    left, right = synthetic.spread_pairs(points, offset, partner, BATCH_PAIRS)
+    rows = []
+    for index in range(BATCH_SPECIMENS):
+        bent = synthetic.random_rigid(synthetic.bend(points, 0.1 + 0.05 * index), seed=index)
+        specimen = pymeshlab.MeshSet()
+        specimen.add_mesh(pymeshlab.Mesh(vertex_matrix=bent, face_matrix=faces))
+        specimen.save_current_mesh(str(folder / f"cow_{index:02d}.ply"))
+        write_landmarks(folder / f"cow_{index:02d}.pp", LandmarkSet([
+            Landmark(f"{side}_{k}", tuple(bent[v])) for k, (a, b) in enumerate(zip(left, right))
+            for side, v in (("L", a), ("R", b))]))
+        rows.append(f"cow_{index:02d}.ply,cow_{index:02d}.pp")
+    manifest = folder / "manifest.csv"
+    manifest.write_text("mesh,landmarks\n" + "\n".join(rows) + "\n")
+    return manifest
+
+
+# `symblend batch` in a process of its own; its peak RSS and its workers' largest, MB, on the last line.
+BATCH_PROCESS = ("import resource, sys; from filter_symblend.cli import main; code = main(sys.argv[1:]); "
+                 "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "
+                 "resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024)")
+
+
+def batch_main() -> None:
+    """`symblend batch` over 16 specimens: wall time with 1 and 2 local workers and on a local Dask cluster."""
+    print(f"\n`symblend batch`, {BATCH_SPECIMENS} bent cows of {len(list(subdivided_cows(2))[-1][0]):,} vertices, "
+          f"{BATCH_PAIRS} landmark pairs each ({time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores)")
+    print("| run | workers | wall s | s per specimen | speed-up | peak RSS MB: main / largest worker |")
+    print("|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as folder:
+        manifest = _batch_study(pathlib.Path(folder))
+        first = None
+        for name, workers in (("local pool", 1), ("local pool", 2)):
+            out, seconds = _child([sys.executable, "-c", BATCH_PROCESS, "batch", str(manifest), "-o",
+                                   str(pathlib.Path(folder) / f"out_{workers}"), "--workers", str(workers)])
+            main_rss, worker_rss = out.strip().splitlines()[-1].split()
+            first = first or seconds
+            print(f"| {name} | {workers} | {seconds:.1f} | {seconds / BATCH_SPECIMENS:.2f} | {first / seconds:.2f}x | "
+                  f"{float(main_rss):.0f} / {float(worker_rss):.0f} |", flush=True)
+        from dask.distributed import LocalCluster
+
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                          dashboard_address=None) as cluster:
+            out, seconds = _child([sys.executable, "-c", BATCH_PROCESS, "batch", str(manifest), "-o",
+                                   str(pathlib.Path(folder) / "out_dask"), "--scheduler", cluster.scheduler_address])
+            memory = max(w.get("metrics", {}).get("memory", 0) for w in cluster.scheduler_info()["workers"].values())
+        print(f"| local Dask cluster | 2 | {seconds:.1f} | {seconds / BATCH_SPECIMENS:.2f} | {first / seconds:.2f}x | "
+              f"{float(out.strip().splitlines()[-1].split()[0]):.0f} / {memory / 1e6:.0f} (worker memory now) |", flush=True)
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--pairs", type=int, nargs="+", default=[100, 300, 1000])
@@ -650,6 +715,7 @@ def main(argv=None) -> None:
     parser.add_argument("--auto", action="store_true", help="automatic pairs against 100 landmark pairs")
     parser.add_argument("--corpus", action="store_true", help="automatic pairs over every corpus mesh")
     parser.add_argument("--filter", action="store_true", help="the MeshSet filter against its core; symblend report")
+    parser.add_argument("--batch", action="store_true", help="symblend batch: 1 and 2 workers, a local Dask cluster")
     parser.add_argument("--filter-row", nargs=3, metavar=("MESH", "PAIRS", "CHECKS"), help=argparse.SUPPRESS)
     parser.add_argument("--levels", type=int, default=4, help="--scale: subdivisions of the cow (4: 743k vertices)")
     parser.add_argument("--scale-pairs", type=int, nargs="+", default=[100, 1000, 10000, 100000])
@@ -668,6 +734,9 @@ def main(argv=None) -> None:
         return
     if args.filter:
         filter_main()
+        return
+    if args.batch:
+        batch_main()
         return
     if args.auto:
         auto_main(args)

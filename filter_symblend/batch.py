@@ -1,0 +1,249 @@
+"""A whole study in one call: ``symblend symmetrize`` over the rows of a manifest, locally or on a Dask cluster.
+
+The manifest is a CSV with a header: ``mesh`` (required), ``landmarks`` (optional), and any option of
+``symblend symmetrize`` as a column (``mode``, ``pairs``, ``pair_table``, ``midline``, ...), which
+overrides the study's defaults for that row. Paths are relative to the manifest's folder. Each row runs
+exactly as ``symblend symmetrize`` does (the same checks and messages), in its own process, with BLAS
+held to one thread; a failing row is reported and the others complete.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import json
+import os
+import pathlib
+import sys
+import time
+import multiprocessing
+from concurrent.futures import ProcessPoolExecutor, as_completed
+
+from .errors import SymblendError
+
+SUMMARY_FIELDS = ("mesh", "status", "seconds", "landmark_asymmetry_before", "landmark_asymmetry_after",
+                  "mirror_asymmetry_before", "mirror_asymmetry_after", "output", "error")
+PATH_COLUMNS = ("mesh", "landmarks", "pair_table")
+OUTPUT_OPTIONS = ("output", "report", "overwrite", "help")  # set by the batch, not by a row
+TRUE_WORDS = {"1", "true", "yes", "y", "x"}
+FALSE_WORDS = {"", "0", "false", "no", "n"}
+
+
+@dataclasses.dataclass(frozen=True)
+class Row:
+    """One specimen: its mesh, the ``symblend symmetrize`` words that run it, and what it writes."""
+
+    mesh: pathlib.Path
+    arguments: tuple[str, ...]
+    output: pathlib.Path
+    report: pathlib.Path
+    inputs: tuple[pathlib.Path, ...]  # files whose change makes the row out of date
+
+    def done(self) -> bool:
+        """Whether its output and report exist and are newer than every input."""
+        if not (self.output.exists() and self.report.exists()):
+            return False
+        written = min(self.output.stat().st_mtime, self.report.stat().st_mtime)
+        return all(not path.exists() or path.stat().st_mtime <= written for path in self.inputs)
+
+
+def _option_table() -> dict[str, argparse.Action]:
+    """``symblend symmetrize``'s options by destination name (``pair_table``, ``mode``, ...)."""
+    from .cli import _add_symmetrize_arguments
+
+    parser = argparse.ArgumentParser(add_help=False)
+    _add_symmetrize_arguments(parser)
+    return {action.dest: action for action in parser._actions if action.option_strings}
+
+
+def _words(action: argparse.Action, value: str, where: str) -> list[str]:
+    """The command-line words of one option given as a manifest cell (flags: true/false words)."""
+    if action.nargs == 0:
+        text = value.strip().lower()
+        if text not in TRUE_WORDS | FALSE_WORDS:
+            raise SymblendError(f"{where}: {value!r} for the flag `{action.dest}`; write true or false.")
+        return [action.option_strings[-1]] if text in TRUE_WORDS else []
+    return [] if not value.strip() else [action.option_strings[-1], value.strip()]
+
+
+def read_manifest(manifest: str | os.PathLike, outdir: str | os.PathLike, defaults: list[str] = ()) -> list[Row]:
+    """The rows of ``manifest`` (see the module docstring), writing to ``outdir``; ``defaults``: words of
+    ``symblend symmetrize`` options for every row, which a row's own columns override."""
+    manifest, outdir = pathlib.Path(manifest), pathlib.Path(outdir)
+    try:
+        with open(manifest, newline="", encoding="utf-8-sig") as handle:
+            reader = csv.DictReader(handle)
+            columns, records = [c.strip() for c in reader.fieldnames or []], list(reader)
+    except OSError as error:
+        raise SymblendError(f"{manifest}: cannot be read ({error.strerror}).") from None
+    if "mesh" not in columns:
+        raise SymblendError(f"{manifest}: needs a header row with a `mesh` column (and optionally landmarks and "
+                            f"any option of symblend symmetrize); got {', '.join(columns) or 'no rows'}.")
+    options = {dest: action for dest, action in _option_table().items() if dest not in OUTPUT_OPTIONS}
+    bad = [c for c in columns if c != "mesh" and c.replace("-", "_") not in options]
+    if bad:
+        raise SymblendError(f"{manifest}: column {bad[0]!r} is not an option of symblend symmetrize (the outputs go "
+                            f"to OUTDIR); valid columns: mesh, {', '.join(sorted(options))}.")
+    rows, stems = [], {}
+    for number, record in enumerate(records, start=2):
+        where = f"{manifest}, line {number}"
+        cells = {key.strip().replace("-", "_"): (value or "") for key, value in record.items() if key is not None}
+        if not cells["mesh"].strip():
+            raise SymblendError(f"{where}: the mesh cell is empty.")
+        for column in PATH_COLUMNS:
+            if cells.get(column, "").strip():
+                cells[column] = str(manifest.parent / cells[column].strip())
+        mesh = pathlib.Path(cells.pop("mesh"))
+        if mesh.stem in stems:
+            raise SymblendError(f"{where}: {mesh.name} has the same name as the mesh of line {stems[mesh.stem]}; "
+                                "both would write OUTDIR/" + mesh.stem + ".ply. Rename one.")
+        stems[mesh.stem] = number
+        words = list(defaults)
+        for column, value in cells.items():
+            words += _words(options[column], value, where)
+        output, report = outdir / f"{mesh.stem}.ply", outdir / f"{mesh.stem}.json"
+        inputs = tuple(pathlib.Path(cells[c]) for c in ("landmarks", "pair_table") if cells.get(c, "").strip())
+        rows.append(Row(mesh, (str(mesh), *words, "-o", str(output), "--report", str(report)), output, report,
+                        (mesh, *inputs)))
+    return rows
+
+
+def run_row(row: Row) -> dict:
+    """One specimen, as ``symblend symmetrize`` runs it: its summary row, and its landmark coordinates
+    after symmetrizing (``"landmarks"``: [[name, x, y, z], ...]) for the study's TPS file."""
+    import warnings
+
+    from threadpoolctl import threadpool_limits
+
+    from .cli import _one_line, symmetrize_arguments, symmetrize_files
+
+    start = time.perf_counter()
+    summary = {"mesh": str(row.mesh), "output": str(row.output)}
+    try:
+        with threadpool_limits(1), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            report, ms = symmetrize_files(symmetrize_arguments(list(row.arguments)))
+    except SymblendError as error:
+        return {**summary, "status": "failed", "seconds": round(time.perf_counter() - start, 2),
+                "error": _one_line(error)}
+    except OSError as error:
+        return {**summary, "status": "failed", "seconds": round(time.perf_counter() - start, 2),
+                "error": f"{error.filename}: {error.strerror}"}
+    points = ms.current_mesh().vertex_matrix()
+    placed = (report.get("landmarks") or {}).get("vertices", [])
+    return {**summary, "status": "ok", "seconds": round(time.perf_counter() - start, 2), **_figures(report),
+            "landmarks": [[name, *map(float, points[vertex])] for name, vertex in placed]}
+
+
+def _figures(report: dict) -> dict:
+    """The summary's asymmetry columns (RMS, relative to the diagonal) from a report."""
+    figures = {}
+    for key in ("landmark_asymmetry_before", "landmark_asymmetry_after", "mirror_asymmetry_before",
+                "mirror_asymmetry_after"):
+        if key in report:
+            figures[key] = f"{report[key]['rms_relative']:.6g}"
+    return figures
+
+
+def _done_before(row: Row) -> dict:
+    """The summary of a row done by an earlier run, from its report."""
+    report = json.loads(row.report.read_text())
+    import pymeshlab
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(row.output))
+    points = ms.current_mesh().vertex_matrix()
+    placed = (report.get("landmarks") or {}).get("vertices", [])
+    return {"mesh": str(row.mesh), "output": str(row.output), "status": "done before", "seconds": 0.0,
+            **_figures(report), "landmarks": [[name, *map(float, points[vertex])] for name, vertex in placed]}
+
+
+def _one_thread() -> None:
+    """Worker start-up: BLAS and OpenMP held to one thread (the workers share the cores)."""
+    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[name] = "1"
+
+
+def _local(rows: list[Row], workers: int):
+    """(row, summary) as each row completes, on a local pool of ``workers`` processes."""
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_one_thread) as pool:
+        futures = {pool.submit(run_row, row): row for row in rows}
+        for future in as_completed(futures):
+            yield futures[future], future.result()
+
+
+def _dask(rows: list[Row], scheduler: str):
+    """(row, summary) as each row completes, on the Dask cluster at ``scheduler``."""
+    try:
+        from dask.distributed import Client, as_completed as dask_completed
+    except ImportError:
+        raise SymblendError("--scheduler runs the rows on a Dask cluster, and dask.distributed is not installed; "
+                            "pip install 'filter-symblend[cluster]'.") from None
+    try:
+        client = Client(scheduler, timeout=30)
+    except (OSError, TimeoutError) as error:
+        raise SymblendError(f"--scheduler {scheduler}: no Dask scheduler answers there ({error}).") from None
+    with client:
+        futures = client.map(run_row, rows, pure=False)
+        by_key = {future.key: row for future, row in zip(futures, rows)}
+        for future in dask_completed(futures):
+            yield by_key[future.key], future.result()
+
+
+def _progress(done: int, total: int, row: Row, status: str) -> None:
+    bar = "#" * int(20 * done / max(total, 1))
+    print(f"\r[{bar:<20}] {done}/{total} specimens, last: {row.mesh.name} {status:<12}", end="\n" if done == total else "",
+          file=sys.stderr, flush=True)
+
+
+def _write_summary(path: pathlib.Path, summaries: list[dict]) -> None:
+    temporary = path.with_name(f".{path.name}.symblend-partial")
+    with open(temporary, "w", newline="") as handle:
+        writer = csv.DictWriter(handle, SUMMARY_FIELDS, extrasaction="ignore", lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(summaries)
+    os.replace(temporary, path)
+
+
+def _write_study_landmarks(path: pathlib.Path, summaries: list[dict]) -> None:
+    from .landmarks.files import Landmark, LandmarkSet, write_tps_study
+
+    study = {pathlib.Path(s["mesh"]).stem: LandmarkSet([Landmark(name, (x, y, z)) for name, x, y, z in s["landmarks"]])
+             for s in summaries if s.get("landmarks")}
+    if study:
+        write_tps_study(path, study)
+
+
+def run(manifest: str | os.PathLike, outdir: str | os.PathLike, defaults: list[str] = (), workers: int | None = None,
+        scheduler: str | None = None, force: bool = False, progress: bool = False) -> list[dict]:
+    """Symmetrize every row of ``manifest`` into ``outdir`` (see the module docstring).
+
+    ``defaults``: ``symblend symmetrize`` option words for every row (e.g. ``["--mode", "affine"]``);
+    ``workers``: local processes (default: the cores); ``scheduler``: a Dask scheduler address
+    (``tcp://host:8786``) to run on instead; ``force``: redo rows whose output and report are newer than
+    their inputs (skipped otherwise). Writes ``<mesh stem>.ply`` and ``.json`` per row, ``summary.csv``
+    (one row per specimen, in manifest order) and ``landmarks.tps`` (the symmetrized landmarks of the
+    study, one specimen per mesh stem). Returns the summary rows.
+    """
+    outdir = pathlib.Path(outdir)
+    if not outdir.is_dir():
+        if outdir.exists() or not outdir.parent.is_dir():
+            raise SymblendError(f"{outdir}: give a folder for the outputs (its parent folder must exist).")
+        outdir.mkdir()
+    rows = read_manifest(manifest, outdir, list(defaults))
+    summaries = {row: _done_before(row) for row in rows if not force and row.done()}
+    pending = [row for row in rows if row not in summaries]
+    if pending:
+        runs = _dask(pending, scheduler) if scheduler else _local(pending, workers or os.cpu_count() or 1)
+        for done, (row, summary) in enumerate(runs, start=len(summaries) + 1):
+            summaries[row] = summary
+            if summary["status"] == "failed":
+                print(f"symblend: {row.mesh.name}: {summary['error']}", file=sys.stderr)
+            if progress:
+                _progress(done, len(rows), row, summary["status"])
+    ordered = [summaries[row] for row in rows]
+    _write_summary(outdir / "summary.csv", ordered)
+    _write_study_landmarks(outdir / "landmarks.tps", ordered)
+    return ordered

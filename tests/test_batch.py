@@ -1,0 +1,139 @@
+"""symblend batch: a study of deformed ground-truth meshes, locally and on a Dask cluster, with a bad row."""
+
+import csv
+import os
+import pathlib
+
+import numpy as np
+import pymeshlab
+import pytest
+
+from filter_symblend import SymblendError, synthetic
+from filter_symblend.batch import read_manifest, run
+from filter_symblend.cli import main
+from filter_symblend.core.landmark_asymmetry import fit_mirror_plane
+from filter_symblend.landmarks.files import Landmark, LandmarkSet, read_landmarks, write_landmarks
+
+BENDS = {"cow_a": 0.2, "cow_b": 0.4, "cow_c": 0.6}
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory, cow):
+    """Three bent cows with 30 landmark pairs each (one row in the affine mode), and a row whose mesh is
+    missing: (manifest, folder)."""
+    folder = tmp_path_factory.mktemp("study")
+    left, right = cow.landmarks(30)
+    for seed, (name, angle) in enumerate(BENDS.items()):
+        bent = synthetic.random_rigid(synthetic.bend(cow.points, angle), seed=seed)
+        ms = pymeshlab.MeshSet()
+        ms.add_mesh(pymeshlab.Mesh(vertex_matrix=bent, face_matrix=cow.faces))
+        ms.save_current_mesh(str(folder / f"{name}.ply"))
+        write_landmarks(folder / f"{name}.pp", LandmarkSet([
+            Landmark(f"{side}_{k}", tuple(bent[v])) for k, (a, b) in enumerate(zip(left, right))
+            for side, v in (("L", a), ("R", b))]))
+    (folder / "manifest.csv").write_text("mesh,landmarks,mode\n" + "cow_a.ply,cow_a.pp,\n" + "cow_b.ply,cow_b.pp,affine\n"
+                                         + "lost.ply,cow_a.pp,\n" + "cow_c.ply,cow_c.pp,\n")
+    return folder / "manifest.csv", folder
+
+
+def _points(path) -> np.ndarray:
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(path))
+    return ms.current_mesh().vertex_matrix()
+
+
+def _summary(outdir: pathlib.Path) -> list[dict]:
+    with open(outdir / "summary.csv", newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+@pytest.fixture(scope="module")
+def local_run(study, tmp_path_factory):
+    manifest, folder = study
+    outdir = tmp_path_factory.mktemp("out") / "symmetrized"  # created by the run
+    code = main(["batch", str(manifest), "-o", str(outdir), "--workers", "2", "--phi-width", "6"])
+    return code, outdir
+
+
+def test_the_local_pool_gives_what_symmetrize_gives_one_by_one(study, local_run, tmp_path, capsys):
+    manifest, folder = study
+    code, outdir = local_run
+    assert code == 1  # one row failed
+    rows = _summary(outdir)
+    assert [pathlib.Path(r["mesh"]).name for r in rows] == ["cow_a.ply", "cow_b.ply", "lost.ply", "cow_c.ply"]
+    assert [r["status"] for r in rows] == ["ok", "ok", "failed", "ok"]
+    assert "lost.ply: no such mesh file" in rows[2]["error"]
+    for name, mode in (("cow_a", "standard"), ("cow_b", "affine"), ("cow_c", "standard")):
+        alone = tmp_path / f"{name}.ply"
+        assert main(["symmetrize", str(folder / f"{name}.ply"), "-l", str(folder / f"{name}.pp"), "-o", str(alone),
+                     "--mode", mode, "--phi-width", "6"]) == 0
+        np.testing.assert_allclose(_points(outdir / f"{name}.ply"), _points(alone), rtol=0, atol=1e-9)
+        assert (outdir / f"{name}.json").exists()
+        row = rows[["cow_a", "cow_b", "lost", "cow_c"].index(name)]
+        assert float(row["landmark_asymmetry_after"]) < 1e-9 < float(row["landmark_asymmetry_before"])
+    # The study's symmetrized landmarks, one TPS specimen per mesh: exactly mirror-symmetric pairs.
+    for name in BENDS:
+        landmarks = read_landmarks(outdir / "landmarks.tps", name)
+        xyz = np.array([lm.position for lm in landmarks.landmarks])
+        assert len(xyz) == 60
+        assert fit_mirror_plane(xyz[:30], xyz[30:]).deviations.max() < 1e-9
+
+
+def test_a_rerun_skips_the_rows_already_done(study, local_run, capsys):
+    manifest, _ = study
+    _, outdir = local_run
+    written = {name: os.stat(outdir / f"{name}.ply").st_mtime_ns for name in BENDS}
+    assert main(["batch", str(manifest), "-o", str(outdir), "--workers", "1", "--phi-width", "6"]) == 1
+    assert "3 of 4 specimens symmetrized, 3 of them done before; 1 failed" in capsys.readouterr().out
+    assert [r["status"] for r in _summary(outdir)] == ["done before", "done before", "failed", "done before"]
+    assert {name: os.stat(outdir / f"{name}.ply").st_mtime_ns for name in BENDS} == written
+    assert len(read_landmarks(outdir / "landmarks.tps", "cow_c").landmarks) == 60
+
+
+def test_a_dask_cluster_runs_the_same_rows(study, local_run, tmp_path):
+    distributed = pytest.importorskip("dask.distributed")
+    manifest, _ = study
+    _, local = local_run
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster:
+        summaries = run(manifest, tmp_path / "dask", ["--phi-width", "6"], scheduler=cluster.scheduler_address)
+    assert [s["status"] for s in summaries] == ["ok", "ok", "failed", "ok"]
+    for name in BENDS:
+        np.testing.assert_allclose(_points(tmp_path / "dask" / f"{name}.ply"), _points(local / f"{name}.ply"),
+                                   rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("landmarks\na.pp\n", r"needs a header row with a `mesh` column .*got landmarks"),
+    ("mesh,colour\na.ply,red\n", r"column 'colour' is not an option of symblend symmetrize .*valid columns: mesh, "),
+    ("mesh,output\na.ply,b.ply\n", r"column 'output' is not an option"),
+    ("mesh,midline\na.ply,maybe\n", r"line 2: 'maybe' for the flag `midline`; write true or false"),
+    ("mesh\na.ply\nsub/a.ply\n", r"line 3: a.ply has the same name as the mesh of line 2"),
+    ("mesh\n\n,\n", r"line 2: the mesh cell is empty"),
+])
+def test_manifest_errors(tmp_path, text, message):
+    (tmp_path / "m.csv").write_text(text)
+    with pytest.raises(SymblendError, match=message):
+        read_manifest(tmp_path / "m.csv", tmp_path)
+
+
+def test_row_options_override_the_defaults(tmp_path):
+    (tmp_path / "m.csv").write_text("mesh,landmarks,mode,midline,pair-table\nskull.ply,skull.tps,affine,true,p.csv\n")
+    [row] = read_manifest(tmp_path / "m.csv", tmp_path / "out", ["--mode", "standard", "--phi-width", "6"])
+    words = list(row.arguments)
+    assert words[0] == str(tmp_path / "skull.ply")
+    assert words[words.index("--landmarks") + 1] == str(tmp_path / "skull.tps")  # relative to the manifest
+    assert words[words.index("--pair-table") + 1] == str(tmp_path / "p.csv")
+    assert words.index("--mode", 2) > words.index("standard")  # the row's mode comes last and wins
+    assert "--midline" in words and row.output == tmp_path / "out" / "skull.ply"
+
+
+def test_batch_command_errors(tmp_path, capsys, monkeypatch):
+    (tmp_path / "m.csv").write_text("mesh\na.ply\n")
+    assert main(["batch", str(tmp_path / "m.csv"), "-o", str(tmp_path / "out"), "--workers", "0"]) == 1
+    assert "--workers 0: give 1 or more processes" in capsys.readouterr().err
+    assert main(["batch", str(tmp_path / "m.csv"), "-o", str(tmp_path / "no" / "out")]) == 1
+    assert "give a folder for the outputs (its parent folder must exist)" in capsys.readouterr().err
+    monkeypatch.setitem(__import__("sys").modules, "dask.distributed", None)
+    assert main(["batch", str(tmp_path / "m.csv"), "-o", str(tmp_path / "out"), "--scheduler", "tcp://127.0.0.1:1"]) == 1
+    assert "dask.distributed is not installed; pip install 'filter-symblend[cluster]'" in capsys.readouterr().err
