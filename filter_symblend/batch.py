@@ -10,15 +10,15 @@ held to one thread; a failing row is reported and the others complete.
 from __future__ import annotations
 
 import argparse
+from concurrent.futures import ProcessPoolExecutor, as_completed
 import csv
 import dataclasses
 import json
+import multiprocessing
 import os
 import pathlib
 import sys
 import time
-import multiprocessing
-from concurrent.futures import ProcessPoolExecutor, as_completed
 
 from .errors import SymblendError
 
@@ -177,7 +177,8 @@ def _local(rows: list[Row], workers: int):
 def _dask(rows: list[Row], scheduler: str):
     """(row, summary) as each row completes, on the Dask cluster at ``scheduler``."""
     try:
-        from dask.distributed import Client, as_completed as dask_completed
+        from dask.distributed import Client
+        from dask.distributed import as_completed as dask_completed
     except ImportError:
         raise SymblendError("--scheduler runs the rows on a Dask cluster, and dask.distributed is not installed; "
                             "pip install 'filter-symblend[cluster]'.") from None

@@ -8,11 +8,11 @@ import inspect
 import numpy as np
 
 from .auto import DEFAULT, symmetrize_automatic
-from .errors import LandmarkError, ParameterError
 from .core.landmark_pairs import check_points
 from .core.mirror_fill import fill_from_mirror
-from .parameters import ARRAYS, CORE, keyword_signature, parameters_doc, validate_parameters
 from .core.symmetrize import SymmetrizationResult, check_landmarks, solve
+from .errors import LandmarkError, ParameterError
+from .parameters import ARRAYS, CORE, keyword_signature, parameters_doc, validate_parameters
 
 
 def _excluded_vertices(auto_excluded, count: int, pairs: str) -> np.ndarray | None:

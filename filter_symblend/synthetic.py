@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .core.landmark_asymmetry import fit_mirror_plane
 from .core.geometry import normalize, rotation_about_axis, similarity_fit, voxel_grid
+from .core.landmark_asymmetry import fit_mirror_plane
 from .core.mesh_quantities import farthest_point_order
 
 

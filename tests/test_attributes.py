@@ -26,7 +26,8 @@ def test_attributes_round_trip(cow):
     weights = np.linspace(0, 1, 40)
     ms = meshset(cow.points, cow.faces)
     write_landmark_attributes(ms.current_mesh(), pairs, right_weights=weights)
-    back, wl, wr = read_landmark_attributes(ms.current_mesh())
+    back = read_landmark_attributes(ms.current_mesh())
+    wl, wr = back.left_weights, back.right_weights
     np.testing.assert_array_equal(back.left, left)
     np.testing.assert_array_equal(back.right, right)
     np.testing.assert_array_equal(np.sort(back.midline), np.sort(pairs.midline))

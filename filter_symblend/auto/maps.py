@@ -14,13 +14,13 @@ of the symmetrized output.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable
+import dataclasses
 
 import numpy as np
 
-from ..core.geometry import normalize, reflection_across_plane, whitening
 from ..checks.surface_asymmetry import fit_surface_mirror_plane
+from ..core.geometry import normalize, reflection_across_plane, whitening
 from .config import AutoConfig
 from .registration import coherent_point_drift, registration_sample
 from .surface import Surface

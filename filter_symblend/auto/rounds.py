@@ -21,13 +21,13 @@ import time
 import numpy as np
 from scipy.sparse.csgraph import connected_components
 
-from ..core.landmark_asymmetry import fit_mirror_plane
-from ..errors import DegenerateNeighbourhoodError, GeometryError, SymmetryNotFoundError
-from ..core.geometry import reflection_across_plane, voxel_grid
-from ..core.neighbourhoods import connecting_width, mean_nearest_spacing, pair_weights
-from ..parameters import CORE, PARAMETERS
 from ..checks.surface_asymmetry import surface_mirror_planes
+from ..core.geometry import reflection_across_plane, voxel_grid
+from ..core.landmark_asymmetry import fit_mirror_plane
+from ..core.neighbourhoods import connecting_width, mean_nearest_spacing, pair_weights
 from ..core.symmetrize import CheckedLandmarks, SymmetrizationResult, check_landmarks, scaled_progress, solve
+from ..errors import DegenerateNeighbourhoodError, GeometryError, SymmetryNotFoundError
+from ..parameters import CORE, PARAMETERS
 from .config import DEFAULT, AutoConfig
 from .connectivity import ring_consistent, tessellation_mirror
 from .growth import _one_pair_per_vertex, grow_and_prune

@@ -6,10 +6,10 @@ import numpy as np
 import pymeshlab
 
 from ..core.landmark_asymmetry import MirrorFit, fit_mirror_plane
-from ..meshlab.attributes import optional_attribute
-from .hausdorff import two_way_distance
 from ..core.landmark_pairs import pairs_from_attribute
+from ..meshlab.attributes import optional_attribute
 from ..parameters import DEFAULTS
+from .hausdorff import two_way_distance
 from .surface_asymmetry import CHECK_SAMPLES, fit_surface_mirror_plane, mirror_asymmetry, refine_mirror_plane
 
 

@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..core.geometry import MirrorPlane, flat_normal, hemisphere_directions, normalize, reflection_across_plane
 from ..core.landmark_asymmetry import MirrorFit, fit_mirror_plane
-from ..core.geometry import flat_normal, hemisphere_directions, normalize, reflection_across_plane
 from ..core.mirror_fill import closest_points_on_surface
 
 ICP_SAMPLES = 10000  # vertices used to refine the best plane
@@ -75,15 +75,15 @@ def _refine_plane(points: np.ndarray, tree: cKDTree, normal: np.ndarray, offset:
 
 
 def fit_surface_mirror_plane(points: np.ndarray, initial: MirrorFit | None = None,
-                             axes: np.ndarray | None = None) -> tuple[np.ndarray, float]:
-    """Best mirror plane ``(normal (3,), offset)`` of a point set (N, 3): normal . x = offset (the first of
+                             axes: np.ndarray | None = None) -> MirrorPlane:
+    """Best mirror plane of a point set (N, 3) (the first of
     :func:`surface_mirror_planes`)."""
     return surface_mirror_planes(points, initial, axes)[0]
 
 
 def surface_mirror_planes(points: np.ndarray, initial: MirrorFit | None = None,
-                          axes: np.ndarray | None = None) -> list[tuple[np.ndarray, float]]:
-    """Mirror planes ``(normal (3,), offset)`` of a point set (N, 3), best first: normal . x = offset.
+                          axes: np.ndarray | None = None) -> list[MirrorPlane]:
+    """Mirror planes of a point set (N, 3), best first.
 
     Starts from the planes through the centroid normal to the rows of ``axes``
     (k, 3) (default the three principal axes, and without ``initial`` the
@@ -114,21 +114,21 @@ def surface_mirror_planes(points: np.ndarray, initial: MirrorFit | None = None,
     distinct = []
     for normal, offset, _ in ends:
         if all(abs(normal @ other) < np.cos(DISTINCT) for other, _ in distinct):
-            distinct.append((normal, offset))
+            distinct.append(MirrorPlane(normal, float(offset)))
     if len(coarse) < len(sample):
-        distinct[0] = _refine_plane(sample, cKDTree(sample), *distinct[0], flat)[:2]
+        distinct[0] = MirrorPlane(*_refine_plane(sample, cKDTree(sample), *distinct[0], flat)[:2])
     return distinct
 
 
-def refine_mirror_plane(points: np.ndarray, normal, offset: float) -> tuple[np.ndarray, float]:
-    """The mirror plane ``(normal (3,), offset)`` of a point set (N, 3) reached by reflection ICP from one
+def refine_mirror_plane(points: np.ndarray, normal, offset: float) -> MirrorPlane:
+    """The mirror plane of a point set (N, 3) reached by reflection ICP from one
     known plane (e.g. the landmarks'), on SCREEN_SAMPLES evenly strided vertices: a plane to measure
     asymmetry against, at a small fixed cost whatever the mesh size."""
     flat = flat_normal(points)
     sample = evenly(points, SCREEN_SAMPLES)
     start = _in_plane(normalize(np.asarray(normal, dtype=float)), flat)
     normal, offset, _ = _refine_plane(sample, cKDTree(sample), start, float(offset), flat)
-    return normal, offset
+    return MirrorPlane(normal, float(offset))
 
 
 def promising_normals(points: np.ndarray, normals: np.ndarray, keep: int, flat: np.ndarray | None = None) -> np.ndarray:
@@ -164,10 +164,10 @@ def mirror_distances(points: np.ndarray, faces: np.ndarray, normal, offset: floa
 
 
 def mirror_asymmetry(points: np.ndarray, faces: np.ndarray, initial: MirrorFit | None = None,
-                     plane: tuple[np.ndarray, float] | None = None, samples: int | None = None) -> dict:
+                     plane: MirrorPlane | None = None, samples: int | None = None) -> dict:
     """The surface against its own reflection across its fitted plane.
 
-    ``plane`` (normal (3,), offset): the result of ``fit_surface_mirror_plane(points,
+    ``plane``: the result of ``fit_surface_mirror_plane(points,
     initial)`` when it is already known, so it is not fitted again. ``samples``: measure
     at most that many evenly strided vertices (all by default).
 

@@ -6,7 +6,16 @@ loop over nothing in Python.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
+
+
+class MirrorPlane(NamedTuple):
+    """The plane {x : normal . x = offset}: ``normal`` (3,) unit vector, ``offset`` in mesh units."""
+
+    normal: np.ndarray
+    offset: float
 
 MIRROR_X = np.diag([-1.0, 1.0, 1.0])
 FLAT = 1e-9  # a point set whose smallest spread is below this fraction of its largest is flat (2D)

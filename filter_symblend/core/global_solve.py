@@ -40,8 +40,8 @@ differs from by the symmetrizing deformation only.
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 from scipy.linalg import cho_factor, cho_solve
+import scipy.sparse as sp
 
 from ..errors import GeometryError
 from .geometry import minimal_rotation, voxel_grid

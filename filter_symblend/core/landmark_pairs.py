@@ -21,12 +21,15 @@ FLAT_RATIO = 1e-6  # landmark spread below this fraction of the largest one coun
 @dataclasses.dataclass(frozen=True)
 class LandmarkPairs:
     """n pairs of vertex indices: pair ``ids[k]`` joins ``left[k]`` (+k) and ``right[k]`` (-k);
-    ``midline`` (m,) holds the vertices of midline landmarks (on the symmetry plane)."""
+    ``midline`` (m,) holds the vertices of midline landmarks (on the symmetry plane);
+    ``left_weights``, ``right_weights`` (n,) in [0, 1], or None for all 1 (0: a missing side)."""
 
     ids: np.ndarray
     left: np.ndarray
     right: np.ndarray
     midline: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    left_weights: np.ndarray | None = None
+    right_weights: np.ndarray | None = None
 
 
 def pairs_from_attribute(values: np.ndarray, attribute: str) -> LandmarkPairs:

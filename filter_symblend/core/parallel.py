@@ -3,10 +3,10 @@ release the GIL, so threads run them in parallel without copying the data."""
 
 from __future__ import annotations
 
-import contextlib
-import os
 from collections.abc import Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
+import contextlib
+import os
 
 import numpy as np
 import scipy.sparse as sp

@@ -6,19 +6,19 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import time
-import warnings
 from typing import Any
+import warnings
 
 import numpy as np
 
-from .landmark_asymmetry import fit_mirror_plane
 from ..errors import GeometryError, LandmarkError, SymblendWarning, id_list
+from ..parameters import CORE, keyword_signature, parameters_doc, validate_parameters
 from .geometry import flat_normal, minimal_rotation, normalize, rigid_fit
 from .global_solve import MINUS_X, global_solve
+from .landmark_asymmetry import fit_mirror_plane
 from .landmark_pairs import LandmarkPairs, check_pairs, check_points, midline_labels
 from .local_symmetries import LocalSymmetries, local_symmetries
 from .neighbourhoods import mean_nearest_spacing, pair_weights, require_connected, scaled_weights
-from ..parameters import CORE, keyword_signature, parameters_doc, validate_parameters
 from .warp import ApproximateThinPlateSpline, thin_plate_spline
 
 # A pair's own mirror misfit, in neighbourhood radii, above which it is reported.

@@ -16,10 +16,10 @@ import warnings
 
 import numpy as np
 
-from ..errors import LandmarkError, SymblendWarning
-from .files import LandmarkSet
 from ..core.landmark_pairs import LandmarkPairs
 from ..core.neighbourhoods import mean_nearest_spacing
+from ..errors import LandmarkError, SymblendWarning
+from .files import LandmarkSet
 from .pairing import LEFT_WORDS, NUMBERED, RIGHT_WORDS, SnappedPairs, nearest_vertices, side_and_base
 from .semilandmarks import edge_graph, resample_curve
 

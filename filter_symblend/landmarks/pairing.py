@@ -18,9 +18,9 @@ import warnings
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..core.landmark_pairs import LandmarkPairs
 from ..errors import LandmarkError, SymblendWarning
 from .files import LandmarkFileError, LandmarkSet
-from ..core.landmark_pairs import LandmarkPairs
 
 LEFT_WORDS = ("l", "left", "lt")
 RIGHT_WORDS = ("r", "right", "rt")

@@ -10,11 +10,13 @@ Midline and weight attributes are optional.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pymeshlab
 
-from ..errors import LandmarkError
 from ..core.landmark_pairs import LandmarkPairs, pairs_from_attribute
+from ..errors import LandmarkError
 from ..parameters import DEFAULTS
 
 
@@ -67,7 +69,7 @@ def write_landmark_attributes(mesh: pymeshlab.Mesh, pairs: LandmarkPairs, left_w
 def read_landmark_attributes(mesh: pymeshlab.Mesh, pair_attribute: str = DEFAULTS["pair_attribute"],
                              midline_attribute: str = DEFAULTS["midline_attribute"],
                              weight_attribute: str = DEFAULTS["weight_attribute"]):
-    """(pairs with midline, left weights (n,) or None, right weights (n,) or None) from ``mesh``."""
+    """The pairs of ``mesh``, with their midline landmarks and weights (None where the mesh has none)."""
     values = optional_attribute(mesh, pair_attribute)
     if values is None:
         raise LandmarkError(
@@ -83,9 +85,9 @@ def read_landmark_attributes(mesh: pymeshlab.Mesh, pair_attribute: str = DEFAULT
         pairs = LandmarkPairs(pairs.ids, pairs.left, pairs.right, np.flatnonzero(midline_values))
     weights = optional_attribute(mesh, weight_attribute)
     if weights is None:
-        return pairs, None, None
+        return pairs
     off = pairs.midline[weights[pairs.midline] != 1]
     if off.size:
         raise LandmarkError(f"Midline landmark on vertex {off[0]} has weight {weights[off[0]]:g} in "
                             f"`{weight_attribute}`; midline landmarks take no weight (set 1).")
-    return pairs, weights[pairs.left], weights[pairs.right]
+    return dataclasses.replace(pairs, left_weights=weights[pairs.left], right_weights=weights[pairs.right])

@@ -19,14 +19,15 @@ import numpy as np
 import pymeshlab
 
 from . import recording
-from ..core.landmark_asymmetry import fit_mirror_plane
-from .attributes import optional_attribute, read_landmark_attributes
-from ..errors import MeshSetError, ParameterError, SymblendWarning
 from ..checks.hausdorff import two_way_distance
-from ..parameters import PARAMETERS, keyword_signature, parameters_doc, validate_parameters
 from ..checks.surface_asymmetry import CHECK_SAMPLES, mirror_asymmetry, refine_mirror_plane
-from ..pipeline import symmetrize
+from ..core.geometry import MirrorPlane
+from ..core.landmark_asymmetry import fit_mirror_plane
 from ..core.symmetrize import SymmetrizationResult
+from ..errors import MeshSetError, ParameterError, SymblendWarning
+from ..parameters import PARAMETERS, keyword_signature, parameters_doc, validate_parameters
+from ..pipeline import symmetrize
+from .attributes import optional_attribute, read_landmark_attributes
 
 FILTER_NAME = "generate_symmetrized_mesh"
 DISPLAY_NAME = "Symmetrize: Closed-form Blending of Local Symmetries"
@@ -127,20 +128,20 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress) -> SymmetrizationRes
                             **core)
     else:
         names = {name: options[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
-        pairs, left_weights, right_weights = read_landmark_attributes(mesh, **names)
-        result = symmetrize(points, pairs.left, pairs.right, pairs.ids, pairs.midline, left_weights, right_weights,
-                            progress, faces, missing=missing, missing_faces=missing_faces, **core)
+        pairs = read_landmark_attributes(mesh, **names)
+        result = symmetrize(points, pairs.left, pairs.right, pairs.ids, pairs.midline, pairs.left_weights,
+                            pairs.right_weights, progress, faces, missing=missing, missing_faces=missing_faces, **core)
     report = result.report
     if options["checks"] != "none":
         if automatic:  # the automatic pairing fitted the input's surface plane already
             surface = report["auto_pairs"]["surface_plane"]
-            input_plane = np.array(surface["normal"]), surface["offset"]
+            input_plane = MirrorPlane(np.array(surface["normal"]), surface["offset"])
         else:
             landmarks = fit_mirror_plane(points[pairs.left], points[pairs.right])
             input_plane = refine_mirror_plane(points, landmarks.normal, landmarks.offset)
         before = mirror_asymmetry(points, faces, plane=input_plane, samples=CHECK_SAMPLES)
-        after = mirror_asymmetry(result.points, faces, plane=(np.array(report["plane_normal"]), report["plane_offset"]),
-                                 samples=CHECK_SAMPLES)
+        after = mirror_asymmetry(result.points, faces, samples=CHECK_SAMPLES,
+                                 plane=MirrorPlane(np.array(report["plane_normal"]), report["plane_offset"]))
         report["mirror_asymmetry_before"] = {k: v for k, v in before.items() if k != "per_vertex"}
         report["mirror_asymmetry_after"] = {k: v for k, v in after.items() if k != "per_vertex"}
     if options["checks"] == "full":

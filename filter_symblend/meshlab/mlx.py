@@ -19,8 +19,8 @@ import numpy as np
 import pymeshlab
 
 from ..errors import ParameterError, SymblendError
-from .meshset_filter import DISPLAY_NAME
 from ..parameters import PARAMETERS, PARAMETERS_BY_NAME, validate_parameters
+from .meshset_filter import DISPLAY_NAME
 
 
 class ScriptError(SymblendError):
