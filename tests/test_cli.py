@@ -557,3 +557,21 @@ def test_a_tps_study_with_three_pairs_and_midline_landmarks(tmp_path, cow, capsy
     assert read_landmarks(tmp_path / "second.pp").names()[:2] == ["1", "2"]
     assert main(["landmarks", "check", str(mesh_path), "-l", str(tps), "--pair-table", str(table), "--midline"]) == 1
     assert "holds 2 specimens (other, specimen-2); the first (other) is used" in capsys.readouterr().err
+
+
+def test_an_unwritable_output_folder_is_refused_first(tmp_path, bent_cow_files, capsys, monkeypatch):
+    import filter_symblend.command_files as command_files
+    mesh_path, landmark_path, *_ = bent_cow_files
+    monkeypatch.setattr(command_files.os, "access", lambda path, mode: False)  # as a user without rights sees it
+    assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "-o", str(tmp_path / "out.ply")]) == 1
+    assert f"the folder {tmp_path} is not writable" in capsys.readouterr().err
+    assert not (tmp_path / "out.ply").exists()
+
+
+def test_help_texts_say_what_each_command_takes(capsys):
+    from filter_symblend.parameters import PARAMETERS_BY_NAME
+    with pytest.raises(SystemExit):
+        main(["mlx", "--help"])
+    text = capsys.readouterr().out
+    assert "--pairs" not in text and "for scripts whose filter uses landmarks" in " ".join(text.split())
+    assert PARAMETERS_BY_NAME["width_spacing"].range_text() == "[0, inf)"  # inf itself is not a width
