@@ -46,7 +46,7 @@ def _add_filter_options(parser: argparse.ArgumentParser) -> None:
 
 def _add_landmark_options(parser: argparse.ArgumentParser, required: bool = True, note: str = "") -> None:
     parser.add_argument("-l", "--landmarks", required=required, type=pathlib.Path,
-                        help="landmark file: .pp, .fcsv, .mrk.json, .pts, .csv or .tps" + note)
+                        help="landmark file: .pp, .fcsv, .mrk.json, .pts, .csv, .tps or .nts" + note)
     _add_specimen_option(parser)
     parser.add_argument("--pair-table", type=pathlib.Path,
                         help="pair table: two-column CSV of landmark names or 1-based numbers (left, right); "
@@ -75,8 +75,8 @@ def _add_landmark_options(parser: argparse.ArgumentParser, required: bool = True
 
 def _add_specimen_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--specimen", metavar="ID|INDEX",
-                        help="the specimen of a .tps file with several (its ID= or a 1-based index); default the "
-                             "first, with a warning")
+                        help="the specimen of a .tps or .nts file with several (its ID or label, or a 1-based "
+                             "index); default the first, with a warning")
 
 
 def _positive_length(text: str) -> float:
@@ -463,7 +463,7 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("input", type=pathlib.Path, help="mesh file")
     _add_landmark_options(check)
     check.set_defaults(handler=_check)
-    convert = sub.add_parser("convert", help="convert between .pp, .fcsv, .mrk.json, .pts, .csv, .tps")
+    convert = sub.add_parser("convert", help="convert between .pp, .fcsv, .mrk.json, .pts, .csv, .tps, .nts")
     convert.add_argument("input", type=pathlib.Path)
     convert.add_argument("output", type=pathlib.Path)
     _add_specimen_option(convert)

@@ -21,7 +21,7 @@ def test_round_trip(tmp_path, suffix):
     write_landmarks(path, SAMPLE)
     back = read_landmarks(path)
     # TPS names landmarks by number (pair tables by number work)
-    assert back.names() == (["1", "2", "3", "4"] if suffix == ".tps" else SAMPLE.names())
+    assert back.names() == (["1", "2", "3", "4"] if suffix in (".tps", ".nts") else SAMPLE.names())
     assert [lm.placed for lm in back.landmarks] == [True, True, True, False]
     for a, b in zip(back.landmarks[:3], SAMPLE.landmarks[:3]):
         assert a.position == b.position
@@ -103,7 +103,7 @@ def test_landmark_editor_pts_with_missing_values(tmp_path):
     ("bad.csv", "a,b,c\n1,2,3\n", r"first row must name the columns name \(or label\), x, y, z"),
     ("bad.fcsv", "# CoordinateSystem = IJK\n", r"coordinate system 'IJK' is not LPS or RAS"),
     ("bad.mrk.json", "{}", r"not a Slicer markups file"),
-    ("bad.txt", "", r"unknown landmark format; use one of .csv, .fcsv, .mrk.json, .pp, .pts"),
+    ("bad.txt", "", r"unknown landmark format; use one of .csv, .fcsv, .mrk.json, .nts, .pp, .pts, .tps"),
 ])
 def test_unreadable_files_name_the_file_and_the_place(tmp_path, name, text, pattern):
     path = tmp_path / name
@@ -192,7 +192,7 @@ def test_tps_errors(tmp_path, text, message):
 def test_a_specimen_is_only_for_tps(tmp_path):
     path = tmp_path / "points.csv"
     write_landmarks(path, SAMPLE)
-    with pytest.raises(LandmarkFileError, match=r"--specimen chooses a specimen of a .tps file"):
+    with pytest.raises(LandmarkFileError, match=r"--specimen chooses a specimen of a .tps or .nts file"):
         read_landmarks(path, "1")
 
 
@@ -220,3 +220,33 @@ def test_a_whole_study_written_as_one_tps_file_reads_back_by_id(tmp_path):
     assert [lm.placed for lm in back.landmarks] == [True, False]
     assert [lm.position for lm in read_landmarks(path, 1).landmarks][:3] == [lm.position for lm in SAMPLE.landmarks[:3]]
     assert path.read_text().count("LM3=") == 2 and "NA NA NA" in path.read_text()
+
+
+NTS_STUDY = '''" three skulls, 2 landmarks each, -999 for missing
+1 2L 6 1 -999 DIM=3
+skull_a skull_b
+1.0 2.0 3.0 -1.0 2.0 3.0
+4.0 5.0 6.0 -999 -999 -999
+'''
+
+
+def test_an_nts_study_one_specimen_by_label_or_index(tmp_path):
+    path = tmp_path / "study.nts"
+    path.write_text(NTS_STUDY)
+    second = read_landmarks(path, "skull_b")
+    assert second.names() == ["1", "2"] and second.landmarks[0].position == (4.0, 5.0, 6.0)
+    assert [lm.placed for lm in second.landmarks] == [True, False]  # the file's own missing code
+    assert read_landmarks(path, 1).landmarks[1].position == (-1.0, 2.0, 3.0)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("2 1 6 0 DIM=3\n1 2 3 4 5 6\n", r"the parameter line must start with 1"),
+    ("1 1 4 0 DIM=2\n1 2 3 4\n", r"DIM=2; the filter needs 3D landmarks \(DIM=3\)"),
+    ("1 1 6 0 DIM=3\n1 2 3 4 5\n", r"1 specimens of 6 values .* need 6 numbers after the labels, and 5 follow"),
+    ("1 one 6 0 DIM=3\n", r"line 1: the parameter line '1 one 6 0 DIM=3' is not"),
+])
+def test_nts_errors(tmp_path, text, message):
+    path = tmp_path / "bad.nts"
+    path.write_text(text)
+    with pytest.raises(LandmarkFileError, match=message):
+        read_landmarks(path)

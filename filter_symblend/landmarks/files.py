@@ -9,9 +9,11 @@
 | .csv        | spreadsheet: name, x, y, z   | an empty coordinate              | mesh       |
 | .tps        | Rohlf's TPS (LM3= blocks;    | a coordinate NA, -999 or 9999    | mesh       |
 |             | geomorph, Morpho, MorphoJ)   |                                  |            |
+| .nts        | NTSYS matrix, one specimen   | its missing-value code, or NA    | mesh       |
+|             | per row (geomorph, Morpho)   |                                  |            |
 
 In every format a coordinate written NA, NaN, -999 or 9999 (as morphometric
-software writes a missing landmark) marks the landmark as not placed. A .tps
+software writes a missing landmark) marks the landmark as not placed. A .tps or .nts
 file may hold several specimens: one is chosen by ID or 1-based index
 (default the first, with a warning naming the others); its landmarks are named
 by number, 1..k, so pair tables by number work; SCALE= is applied.
@@ -336,6 +338,62 @@ def write_tps_study(path, specimens: dict[str, LandmarkSet]) -> None:
     temporary.replace(path)
 
 
+def _nts_specimens(text: str, path: str) -> list[_Specimen]:
+    """The specimens of an NTS file in the multiple-specimen format (Rohlf): a parameter line
+    ``1 n[L] p*k[L] 0|1 [missing code] DIM=3``, then the labels (if L), then n rows of p*k values; text
+    after a double quote is a comment."""
+    tokens = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        tokens += [(token, number) for token in line.split('"')[0].split()]
+    if len(tokens) < 4 or tokens[0][0] != "1":
+        raise LandmarkFileError(f"{path}: the parameter line must start with 1 (a rectangular matrix): "
+                                "1 <specimens> <landmarks x 3> 0 DIM=3.")
+    words = [t for t, _ in tokens]
+    dimension = next((w.upper().split("=", 1)[1] for w in words[:7] if w.upper().startswith("DIM=")), "3")
+    if dimension != "3":
+        raise LandmarkFileError(f"{path}: DIM={dimension}; the filter needs 3D landmarks (DIM=3).")
+    try:
+        count, values = int(words[1].rstrip("Ll")), int(words[2].rstrip("Ll"))
+        has_missing = words[3] == "1"
+    except ValueError:
+        raise LandmarkFileError(f"{path}, line {tokens[0][1]}: the parameter line {' '.join(words[:5])!r} is not "
+                                "1 <specimens> <landmarks x 3> 0|1 ... DIM=3.") from None
+    missing_code = words[4] if has_missing else None
+    position = 4 + has_missing + any(w.upper().startswith("DIM=") for w in words[4:6])
+    labels = []
+    if words[1][-1:] in "Ll":
+        labels, position = words[position:position + count], position + count
+    if words[2][-1:] in "Ll":
+        position += values
+    data = tokens[position:]
+    if values % 3 or len(data) != count * values:
+        raise LandmarkFileError(f"{path}: {count} specimens of {values} values (landmarks x 3) need {count * values} "
+                                f"numbers after the labels, and {len(data)} follow.")
+    specimens = []
+    for index in range(count):
+        row = [t for t, _ in data[index * values:(index + 1) * values]]
+        row = ["NA" if missing_code is not None and v == missing_code else v for v in row]
+        specimens.append(_Specimen([row[i:i + 3] for i in range(0, values, 3)], data[index * values][1],
+                                   labels[index] if labels else None))
+    return specimens
+
+
+def read_nts(text: str, path: str, specimen: str | int | None = None) -> LandmarkSet:
+    """One specimen of an NTS file (see :func:`_nts_specimens`): landmarks named 1..k."""
+    chosen = _chosen(_nts_specimens(text, path), path, specimen)
+    landmarks = []
+    for index, row in enumerate(chosen.rows, start=1):
+        position, placed = _position(row, f"{path}, line {chosen.line}, landmark {index}")
+        landmarks.append(Landmark(str(index), position, placed))
+    return LandmarkSet(landmarks)
+
+
+def _write_nts(landmarks: LandmarkSet) -> str:
+    values = " ".join(" ".join(repr(float(v)) for v in lm.position) if lm.placed else "-999 -999 -999"
+                      for lm in landmarks.landmarks)
+    return f'" written by filter_symblend\n1 1L {3 * len(landmarks.landmarks)} 1 -999 DIM=3\nspecimen\n{values}\n'
+
+
 FORMATS = {
     ".pp": (_read_pp, _write_pp),
     ".fcsv": (_read_fcsv, _write_fcsv),
@@ -343,6 +401,7 @@ FORMATS = {
     ".pts": (_read_pts, _write_pts),
     ".csv": (_read_csv, _write_csv),
     ".tps": (read_tps, _write_tps),
+    ".nts": (read_nts, _write_nts),
 }
 
 
@@ -356,18 +415,18 @@ def _format_of(path: pathlib.Path) -> str:
 
 def read_landmarks(path, specimen: str | int | None = None) -> LandmarkSet:
     """Read a landmark file; the format comes from the suffix (see the module table). ``specimen`` (an ID
-    or a 1-based index) chooses one specimen of a .tps file."""
+    or a 1-based index) chooses one specimen of a .tps or .nts file."""
     path = pathlib.Path(path)
     suffix = _format_of(path)
-    if specimen is not None and suffix != ".tps":
-        raise LandmarkFileError(f"{path}: --specimen chooses a specimen of a .tps file; this file holds one "
-                                "set of landmarks. Leave it out.")
+    if specimen is not None and suffix not in (".tps", ".nts"):
+        raise LandmarkFileError(f"{path}: --specimen chooses a specimen of a .tps or .nts file; this file holds "
+                                "one set of landmarks. Leave it out.")
     try:
         text = path.read_text(encoding="utf-8-sig")
     except OSError as error:
         raise LandmarkFileError(f"{path}: cannot be read ({error.strerror}).") from None
-    if suffix == ".tps":
-        return read_tps(text, str(path), specimen)
+    if suffix in (".tps", ".nts"):
+        return FORMATS[suffix][0](text, str(path), specimen)
     return FORMATS[suffix][0](text, str(path))
 
 
