@@ -150,8 +150,9 @@ Parameters
 points : (N, 3) float array
     Vertex coordinates, any unit.
 left, right : (n,) int arrays
-    Vertex indices of the left and right landmark of each pair, n >= 4
-    (none with ``pairs='auto'``).
+    Vertex indices of the left and right landmark of each pair, n >= 1, with
+    ``midline`` spanning a symmetry plane and 4 landmarks off one plane in all
+    (3 pairs, or 2 pairs and a midline landmark; none with ``pairs='auto'``).
 pair_ids : (n,) int array, optional
     Pair labels used in messages (default 1..n).
 midline : (m,) int array, optional

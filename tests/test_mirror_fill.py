@@ -69,14 +69,21 @@ def test_a_filled_hole_takes_the_shape_of_its_mirror_twin(cow):
     assert np.abs(output[:before] - filled[:before]).max() < 1e-9 * cow.diagonal
 
 
-def test_weight_attribute_marks_a_broken_part(cow):
+def broken_cow(cow):
+    """The cow with a bump pushed out of one side (a broken part): (bumped points, broken (N,) bool, left and
+    right landmark vertices off the broken part)."""
     centre = cow.points[np.argmax(cow.points[:, 0])]
     broken = np.linalg.norm(cow.points - centre, axis=1) < 0.07 * cow.diagonal
     bumped = cow.points.copy()
     bumped[broken, 0] += 0.03 * cow.diagonal
     left, right = cow.landmarks(150)
     sound = ~broken[left] & ~broken[right]
-    ms = meshset_with_pairs(bumped, cow.faces, left[sound], right[sound])
+    return bumped, broken, left[sound], right[sound]
+
+
+def test_weight_attribute_marks_a_broken_part(cow):
+    bumped, broken, left, right = broken_cow(cow)
+    ms = meshset_with_pairs(bumped, cow.faces, left, right)
     ms.current_mesh().add_vertex_custom_scalar_attribute(np.where(broken, 0.0, 1.0), "symblend_weight")
     ms.generate_symmetrized_mesh(missing_region="weight")
     output = ms.current_mesh().vertex_matrix()
@@ -105,22 +112,16 @@ def test_the_fill_runs_on_arrays_as_in_the_filter_and_in_either_frame(cow):
     """`symmetrize(..., missing=...)` is what the filter's missing_region does; the canonical frame is
     the same fill moved rigidly."""
     from filter_symblend import ParameterError, symmetrize
-    centre = cow.points[np.argmax(cow.points[:, 0])]
-    broken = np.linalg.norm(cow.points - centre, axis=1) < 0.07 * cow.diagonal
-    bumped = cow.points.copy()
-    bumped[broken, 0] += 0.03 * cow.diagonal
-    left, right = cow.landmarks(150)
-    sound = ~broken[left] & ~broken[right]
+    bumped, broken, left, right = broken_cow(cow)
     missing = np.where(broken, 1.0, 0.0)
-    result = symmetrize(bumped, left[sound], right[sound], faces=cow.faces, missing=missing)
-    ms = meshset_with_pairs(bumped, cow.faces, left[sound], right[sound])
+    result = symmetrize(bumped, left, right, faces=cow.faces, missing=missing)
+    ms = meshset_with_pairs(bumped, cow.faces, left, right)
     ms.current_mesh().add_vertex_custom_scalar_attribute(1.0 - missing, "symblend_weight")
     ms.generate_symmetrized_mesh(missing_region="weight")
     np.testing.assert_allclose(result.points, ms.current_mesh().vertex_matrix(), atol=1e-9)
     assert result.report["filled_vertices"] == broken.sum()
     assert _distance_to_truth(cow, result.points[broken]).max() < _distance_to_truth(cow, bumped[broken]).max() / 3
-    canonical = symmetrize(bumped, left[sound], right[sound], faces=cow.faces, missing=missing,
-                           output_frame="canonical")
+    canonical = symmetrize(bumped, left, right, faces=cow.faces, missing=missing, output_frame="canonical")
     transform = np.array(canonical.report["canonical_from_input"])
     np.testing.assert_allclose(canonical.points, result.points @ transform[:3, :3].T + transform[:3, 3], atol=1e-9)
     with pytest.raises(ParameterError, match=r"`missing` vertices take the mirror shape .* pass `faces`"):

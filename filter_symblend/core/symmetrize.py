@@ -4,7 +4,6 @@ and nothing about where the pairs come from (automatic pairs are a layer above, 
 from __future__ import annotations
 
 import dataclasses
-import inspect
 import time
 from typing import Any
 import warnings
@@ -12,11 +11,10 @@ import warnings
 import numpy as np
 
 from ..errors import GeometryError, LandmarkError, SymblendWarning, id_list
-from ..parameters import CORE, keyword_signature, parameters_doc, validate_parameters
 from .geometry import flat_normal, minimal_rotation, normalize, rigid_fit
 from .global_solve import MINUS_X, global_solve
 from .landmark_asymmetry import fit_mirror_plane
-from .landmark_pairs import LandmarkPairs, check_pairs, check_points, midline_labels
+from .landmark_pairs import LandmarkPairs, check_pairs, midline_labels
 from .local_symmetries import LocalSymmetries, local_symmetries
 from .neighbourhoods import mean_nearest_spacing, pair_weights, require_connected, scaled_weights
 from .warp import ApproximateThinPlateSpline, thin_plate_spline
@@ -271,59 +269,6 @@ def check_landmarks(points: np.ndarray, left, right, pair_ids=None, midline=None
         raise LandmarkError(f"Pair {ids[both_missing][0]} has weight 0 on both sides, so nothing "
                             "says where it goes; give the sound side weight 1, or remove the pair.")
     return CheckedLandmarks(left, right, ids, midline, wl, wr)
-
-
-def symmetrize_landmarks(points, left, right, pair_ids=None, midline=None, left_weights=None,
-                         right_weights=None, progress=None, **params) -> SymmetrizationResult:
-    _report_progress(progress, 0.0, "checking landmarks")
-    options = validate_parameters(params, CORE)
-    points = check_points(points)
-    return solve(points, check_landmarks(points, left, right, pair_ids, midline, left_weights, right_weights),
-                 options, progress)
-
-
-symmetrize_landmarks.__signature__ = keyword_signature(
-    *(inspect.Parameter(name, inspect.Parameter.POSITIONAL_OR_KEYWORD, default=default)
-      for name, default in (("points", inspect.Parameter.empty), ("left", inspect.Parameter.empty),
-                            ("right", inspect.Parameter.empty), ("pair_ids", None), ("midline", None),
-                            ("left_weights", None), ("right_weights", None), ("progress", None))),
-    layers=CORE)
-symmetrize_landmarks.__doc__ = f"""The paper's method: symmetrize ``points`` (N, 3) so that each pair (left[k], right[k]) becomes mirror-symmetric.
-
-Implements Ghosh, Amenta and Kazhdan, *Closed-form Blending of Local
-Symmetries* (SGP 2010): a local transform per pair (Step 1), one sparse
-least-squares solve for a single global bilateral symmetry (Step 2), and a
-thin-plate-spline warp of every point. :func:`filter_symblend.symmetrize` is
-this with automatic pairs besides.
-
-Parameters
-----------
-points : (N, 3) float array
-    Vertex coordinates, any unit.
-left, right : (n,) int arrays
-    Vertex indices of the left and right landmark of each pair, n >= 4.
-pair_ids : (n,) int array, optional
-    Pair labels used in messages (default 1..n).
-midline : (m,) int array, optional
-    Vertices of midline landmarks: they end up exactly on the symmetry plane.
-left_weights, right_weights : (n,) float arrays in [0, 1], optional
-    How much each landmark's input geometry counts (default 1). 0 marks a
-    missing or broken side: it becomes the mirror image of the other side.
-progress : callable(percent: float, message: str), optional
-    Called at the start of each stage, as MeshLab filters report progress.
-    An exception it raises (or Ctrl-C) stops the run; nothing is changed.
-{parameters_doc(CORE)}
-
-Returns
--------
-SymmetrizationResult
-    ``points`` (N, 3) output, ``asymmetry`` (N,) distance moved per vertex,
-    ``report`` dict (see the docs).
-
-Raises
-------
-SymblendError (a ValueError) naming the parameter, pair or vertex at fault.
-"""
 
 
 def scaled_progress(progress, start: float, width: float):
