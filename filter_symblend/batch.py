@@ -130,6 +130,9 @@ def run_row(row: Row) -> dict:
     except OSError as error:
         return {**summary, "status": "failed", "seconds": round(time.perf_counter() - start, 2),
                 "error": f"{error.filename}: {error.strerror}"}
+    except Exception as error:  # noqa: BLE001  one specimen's failure, of any kind, must not stop the study
+        return {**summary, "status": "failed", "seconds": round(time.perf_counter() - start, 2),
+                "error": f"unexpected {type(error).__name__}: {_one_line(error)} (please report it)"}
     points = ms.current_mesh().vertex_matrix()
     placed = (report.get("landmarks") or {}).get("vertices", [])
     return {**summary, "status": "ok", "seconds": round(time.perf_counter() - start, 2), **_figures(report),

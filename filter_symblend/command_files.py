@@ -21,7 +21,7 @@ def check_output_path(path: pathlib.Path, inputs: list[pathlib.Path], overwrite:
     its folder exists and is writable, its extension one of ``formats`` (any without), and not one of
     ``inputs`` unless ``overwrite``."""
     if path.is_dir():
-        raise SymblendError(f"{path}: is a folder; give the {what} a file name, e.g. {path / ('out.' + (formats or ('json',))[0])}.")
+        raise SymblendError(f"{path}: is a folder; give the {what} a file name (in that folder, if you like).")
     folder = path.parent
     if not folder.is_dir():
         raise SymblendError(f"{path}: the folder {folder} does not exist; create it first.")

@@ -137,3 +137,17 @@ def test_batch_command_errors(tmp_path, capsys, monkeypatch):
     monkeypatch.setitem(__import__("sys").modules, "dask.distributed", None)
     assert main(["batch", str(tmp_path / "m.csv"), "-o", str(tmp_path / "out"), "--scheduler", "tcp://127.0.0.1:1"]) == 1
     assert "dask.distributed is not installed; pip install 'filter-symblend[cluster]'" in capsys.readouterr().err
+
+
+def test_an_unexpected_failure_of_one_row_is_reported_not_raised(study, monkeypatch):
+    import filter_symblend.cli as cli
+    from filter_symblend.batch import run_row
+    manifest, folder = study
+    [row, *_] = read_manifest(manifest, folder / "unexpected")
+
+    def broken(args, progress=None):
+        raise RuntimeError("disk on fire")
+
+    monkeypatch.setattr(cli, "symmetrize_files", broken)
+    summary = run_row(row)
+    assert summary["status"] == "failed" and summary["error"] == "unexpected RuntimeError: disk on fire (please report it)"

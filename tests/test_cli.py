@@ -223,6 +223,14 @@ def _damaged_obj(path: pathlib.Path, damage: str) -> pathlib.Path:
     return path
 
 
+def _damaged_ply(path: pathlib.Path) -> pathlib.Path:
+    """An ASCII PLY tetrahedron with a fifth vertex 'nan nan nan' (pymeshlab drops it and renumbers)."""
+    path.write_text("ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+                    "element face 4\nproperty list uchar int vertex_indices\nend_header\n"
+                    "0 0 0\nnan nan nan\n1 0 0\n0 1 0\n0 0 1\n3 0 3 2\n3 0 2 4\n3 2 3 4\n3 0 4 3\n")
+    return path
+
+
 def _probe_arguments(tmp_path, mesh_path, landmark_path):
     """(name, arguments, the one-line error expected): bad outputs and damaged meshes, each refused before
     any computation."""
@@ -230,6 +238,8 @@ def _probe_arguments(tmp_path, mesh_path, landmark_path):
     return [
         ("output is the input", ["-o", str(mesh_path)], r"cow_bent.obj: is the input file; .*--overwrite"),
         ("output is a folder", ["-o", str(tmp_path)], r"is a folder; give the output mesh a file name"),
+        ("nan vertex in a PLY", ["-o", str(tmp_path / "out.ply"), "INPUT", str(_damaged_ply(tmp_path / "nan.ply"))],
+         r"nan.ply: the file declares 5 vertices and 4 could be read"),
         ("no extension", ["-o", str(tmp_path / "out")], r"out: no extension; the output mesh needs one pymeshlab "
                                                           r"writes: .*\.ply"),
         ("unknown extension", ["-o", str(tmp_path / "out.xyzzy")], r"out.xyzzy: the extension '.xyzzy'"),
