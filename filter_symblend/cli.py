@@ -1,12 +1,13 @@
-"""The ``symblend`` command: symmetrize a mesh from a landmark file, run filter scripts, compare
-before and after, check and convert landmarks.
+"""The symblend command: symmetrize a mesh from a landmark file or a whole study, run filter scripts,
+compare before and after, check and convert landmarks.
 
     symblend symmetrize INPUT -l LANDMARKS -o OUTPUT [--pair-table PAIRS.csv] [--curves] [--report REPORT.json] [filter options]
     symblend symmetrize INPUT --pairs auto -o OUTPUT [--report REPORT.json] [filter options]
+    symblend batch MANIFEST.csv -o OUTDIR [--workers N] [--scheduler ADDRESS] [--force] [symmetrize options]
     symblend mlx SCRIPT.mlx INPUT [-l LANDMARKS] -o OUTPUT [--report REPORT.json]
     symblend report BEFORE AFTER [--png PICTURE.png] [--json NUMBERS.json]
     symblend landmarks check INPUT -l LANDMARKS [--pair-table PAIRS.csv]
-    symblend landmarks convert IN OUT
+    symblend landmarks convert IN OUT [--specimen ID|INDEX]
 
 The filter options are generated from the filter's parameter declaration.
 Errors are one line on stderr and nothing is written; exit status 1 bad input, 2 usage, 130 interrupted.
