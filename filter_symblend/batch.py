@@ -13,6 +13,7 @@ import argparse
 from concurrent.futures import ProcessPoolExecutor, as_completed
 import csv
 import dataclasses
+import io
 import json
 import multiprocessing
 import os
@@ -20,6 +21,7 @@ import pathlib
 import sys
 import time
 
+from .atomic import write_text
 from .errors import SymblendError
 
 SUMMARY_FIELDS = ("mesh", "status", "seconds", "landmark_asymmetry_before", "landmark_asymmetry_after",
@@ -203,12 +205,11 @@ def _progress(done: int, total: int, row: Row, status: str) -> None:
 
 
 def _write_summary(path: pathlib.Path, summaries: list[dict]) -> None:
-    temporary = path.with_name(f".{path.name}.symblend-partial")
-    with open(temporary, "w", newline="") as handle:
-        writer = csv.DictWriter(handle, SUMMARY_FIELDS, extrasaction="ignore", lineterminator="\n")
-        writer.writeheader()
-        writer.writerows(summaries)
-    os.replace(temporary, path)
+    table = io.StringIO()
+    writer = csv.DictWriter(table, SUMMARY_FIELDS, extrasaction="ignore", lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(summaries)
+    write_text(path, table.getvalue())
 
 
 def _write_study_landmarks(path: pathlib.Path, summaries: list[dict]) -> None:

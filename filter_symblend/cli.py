@@ -17,12 +17,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import pathlib
 import signal
 import sys
 import warnings
 
+from .atomic import replaced_when_done, write_text
 from .command_files import MESH_SAVE_FORMATS, check_loaded_mesh, check_output_path
 from .errors import SymblendError, SymblendWarning
 from .parameters import DEFAULTS, PARAMETERS
@@ -151,18 +151,15 @@ def _save_atomically(ms, output: pathlib.Path) -> None:
 
     from .meshlab.attributes import custom_attribute_names
 
-    temporary = output.with_name(f".{output.stem}.symblend-partial{output.suffix}")
     options = {}
     if output.suffix.lower() == ".ply":
         options = {"save_vertex_quality": True,
                    **{f"__ca_vs__{name}": True for name in custom_attribute_names(ms)["vs"]}}
     try:
-        ms.save_current_mesh(str(temporary), **options)
-        os.replace(temporary, output)
+        with replaced_when_done(output) as temporary:
+            ms.save_current_mesh(str(temporary), **options)
     except pymeshlab.PyMeshLabException as error:
         raise SymblendError(f"{output}: pymeshlab cannot write it ({_one_line(error)}).") from None
-    finally:
-        temporary.unlink(missing_ok=True)
 
 
 def _terminal_progress(percent: float, message: str) -> None:
@@ -198,12 +195,7 @@ def _write_landmarks(ms, args, names: dict) -> dict:
 def _write_report(path, report) -> None:
     """Write ``report`` as JSON to ``path`` (if given) under a temporary name, then rename it."""
     if path:
-        temporary = path.with_name(f".{path.name}.symblend-partial")
-        try:
-            temporary.write_text(json.dumps(report, indent=2, default=_jsonable) + "\n")
-            os.replace(temporary, path)
-        finally:
-            temporary.unlink(missing_ok=True)
+        write_text(path, json.dumps(report, indent=2, default=_jsonable) + "\n")
 
 
 def _jsonable(value):

@@ -33,6 +33,7 @@ import pathlib
 import warnings
 import xml.etree.ElementTree as ElementTree
 
+from ..atomic import write_text
 from ..errors import SymblendError, SymblendWarning
 
 MISSING_PTS_VALUE = 9999.0
@@ -331,11 +332,7 @@ def _write_tps(landmarks: LandmarkSet, identifier: str = "specimen") -> str:
 def write_tps_study(path, specimens: dict[str, LandmarkSet]) -> None:
     """Several specimens (ID -> landmarks) in one TPS file, as geomorph's readland.tps and Morpho's
     readallTPS read them (missing coordinates as NA)."""
-    text = "".join(_write_tps(landmarks, identifier) for identifier, landmarks in specimens.items())
-    path = pathlib.Path(path)
-    temporary = path.with_name(path.name + ".partial")
-    temporary.write_text(text, encoding="utf-8")
-    temporary.replace(path)
+    write_text(path, "".join(_write_tps(landmarks, identifier) for identifier, landmarks in specimens.items()))
 
 
 def _nts_specimens(text: str, path: str) -> list[_Specimen]:
@@ -432,8 +429,4 @@ def read_landmarks(path, specimen: str | int | None = None) -> LandmarkSet:
 
 def write_landmarks(path, landmarks: LandmarkSet) -> None:
     """Write ``landmarks`` in the format of the suffix, all at once (no partial file on error)."""
-    path = pathlib.Path(path)
-    text = FORMATS[_format_of(path)][1](landmarks)
-    temporary = path.with_name(path.name + ".partial")
-    temporary.write_text(text, encoding="utf-8")
-    temporary.replace(path)
+    write_text(path, FORMATS[_format_of(pathlib.Path(path))][1](landmarks))

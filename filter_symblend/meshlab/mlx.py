@@ -10,14 +10,13 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import functools
-import os
 import pathlib
-import tempfile
 import xml.etree.ElementTree as ElementTree
 
 import numpy as np
 import pymeshlab
 
+from ..atomic import write_text
 from ..errors import ParameterError, SymblendError
 from ..parameters import PARAMETERS, PARAMETERS_BY_NAME, validate_parameters
 from .meshset_filter import DISPLAY_NAME
@@ -79,15 +78,7 @@ def write_filter_script(nodes: list[FilterNode], path) -> None:
         for param in node.params:
             ElementTree.SubElement(element, "Param", param)
     ElementTree.indent(root, space=" ")
-    path = pathlib.Path(path)
-    handle, temporary = tempfile.mkstemp(suffix=".mlx", dir=path.parent)
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as out:
-            out.write("<!DOCTYPE FilterScript>\n" + ElementTree.tostring(root, encoding="unicode") + "\n")
-        os.replace(temporary, path)
-    finally:
-        if os.path.exists(temporary):
-            os.unlink(temporary)
+    write_text(path, "<!DOCTYPE FilterScript>\n" + ElementTree.tostring(root, encoding="unicode") + "\n")
 
 
 # ---- our node ----------------------------------------------------------------------------------
