@@ -22,10 +22,12 @@ import sys
 import time
 
 from .atomic import write_text
+from .cli import _add_symmetrize_arguments, _one_line, _terminal_progress, symmetrize_arguments, symmetrize_files
 from .errors import SymblendError
 
-SUMMARY_FIELDS = ("mesh", "status", "seconds", "landmark_asymmetry_before", "landmark_asymmetry_after",
-                  "mirror_asymmetry_before", "mirror_asymmetry_after", "output", "error")
+ASYMMETRY_FIELDS = ("landmark_asymmetry_before", "landmark_asymmetry_after", "mirror_asymmetry_before",
+                    "mirror_asymmetry_after")  # report entries whose RMS (relative) the summary shows
+SUMMARY_FIELDS = ("mesh", "status", "seconds", *ASYMMETRY_FIELDS, "output", "error")
 PATH_COLUMNS = ("mesh", "landmarks", "pair_table")
 OUTPUT_OPTIONS = ("output", "report", "overwrite", "help")  # set by the batch, not by a row
 TRUE_WORDS = {"1", "true", "yes", "y", "x"}
@@ -52,8 +54,6 @@ class Row:
 
 def _option_table() -> dict[str, argparse.Action]:
     """``symblend symmetrize``'s options by destination name (``pair_table``, ``mode``, ...)."""
-    from .cli import _add_symmetrize_arguments
-
     parser = argparse.ArgumentParser(add_help=False)
     _add_symmetrize_arguments(parser)
     return {action.dest: action for action in parser._actions if action.option_strings}
@@ -118,37 +118,30 @@ def run_row(row: Row) -> dict:
 
     from threadpoolctl import threadpool_limits
 
-    from .cli import _one_line, symmetrize_arguments, symmetrize_files
-
     start = time.perf_counter()
     summary = {"mesh": str(row.mesh), "output": str(row.output)}
     try:
         with threadpool_limits(1), warnings.catch_warnings():
             warnings.simplefilter("ignore")
             report, ms = symmetrize_files(symmetrize_arguments(list(row.arguments)))
-    except SymblendError as error:
-        return {**summary, "status": "failed", "seconds": round(time.perf_counter() - start, 2),
-                "error": _one_line(error)}
-    except OSError as error:
-        return {**summary, "status": "failed", "seconds": round(time.perf_counter() - start, 2),
-                "error": f"{error.filename}: {error.strerror}"}
     except Exception as error:  # noqa: BLE001  one specimen's failure, of any kind, must not stop the study
-        return {**summary, "status": "failed", "seconds": round(time.perf_counter() - start, 2),
-                "error": f"unexpected {type(error).__name__}: {_one_line(error)} (please report it)"}
-    points = ms.current_mesh().vertex_matrix()
+        if isinstance(error, SymblendError):
+            message = _one_line(error)
+        elif isinstance(error, OSError):
+            message = f"{error.filename}: {error.strerror}"
+        else:
+            message = f"unexpected {type(error).__name__}: {_one_line(error)} (please report it)"
+        return {**summary, "status": "failed", "seconds": round(time.perf_counter() - start, 2), "error": message}
+    return {**summary, "status": "ok", "seconds": round(time.perf_counter() - start, 2),
+            **_from_report(report, ms.current_mesh().vertex_matrix())}
+
+
+def _from_report(report: dict, points) -> dict:
+    """What a specimen's summary takes from its report and output points (N, 3): the asymmetry columns
+    (RMS, relative to the diagonal) and its landmarks after symmetrizing ([[name, x, y, z], ...])."""
+    figures = {key: f"{report[key]['rms_relative']:.6g}" for key in ASYMMETRY_FIELDS if key in report}
     placed = (report.get("landmarks") or {}).get("vertices", [])
-    return {**summary, "status": "ok", "seconds": round(time.perf_counter() - start, 2), **_figures(report),
-            "landmarks": [[name, *map(float, points[vertex])] for name, vertex in placed]}
-
-
-def _figures(report: dict) -> dict:
-    """The summary's asymmetry columns (RMS, relative to the diagonal) from a report."""
-    figures = {}
-    for key in ("landmark_asymmetry_before", "landmark_asymmetry_after", "mirror_asymmetry_before",
-                "mirror_asymmetry_after"):
-        if key in report:
-            figures[key] = f"{report[key]['rms_relative']:.6g}"
-    return figures
+    return {**figures, "landmarks": [[name, *map(float, points[vertex])] for name, vertex in placed]}
 
 
 def _done_before(row: Row) -> dict:
@@ -158,22 +151,15 @@ def _done_before(row: Row) -> dict:
 
     ms = pymeshlab.MeshSet()
     ms.load_new_mesh(str(row.output))
-    points = ms.current_mesh().vertex_matrix()
-    placed = (report.get("landmarks") or {}).get("vertices", [])
     return {"mesh": str(row.mesh), "output": str(row.output), "status": "done before", "seconds": 0.0,
-            **_figures(report), "landmarks": [[name, *map(float, points[vertex])] for name, vertex in placed]}
-
-
-def _one_thread() -> None:
-    """Worker start-up: BLAS and OpenMP held to one thread (the workers share the cores)."""
-    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ[name] = "1"
+            **_from_report(report, ms.current_mesh().vertex_matrix())}
 
 
 def _local(rows: list[Row], workers: int):
-    """(row, summary) as each row completes, on a local pool of ``workers`` processes."""
+    """(row, summary) as each row completes, on a local pool of ``workers`` processes (each row holds BLAS
+    to one thread, :func:`run_row`)."""
     context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_one_thread) as pool:
+    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
         futures = {pool.submit(run_row, row): row for row in rows}
         for future in as_completed(futures):
             yield futures[future], future.result()
@@ -196,12 +182,6 @@ def _dask(rows: list[Row], scheduler: str):
         by_key = {future.key: row for future, row in zip(futures, rows)}
         for future in dask_completed(futures):
             yield by_key[future.key], future.result()
-
-
-def _progress(done: int, total: int, row: Row, status: str) -> None:
-    bar = "#" * int(20 * done / max(total, 1))
-    print(f"\r[{bar:<20}] {done}/{total} specimens, last: {row.mesh.name} {status:<12}", end="\n" if done == total else "",
-          file=sys.stderr, flush=True)
 
 
 def _write_summary(path: pathlib.Path, summaries: list[dict]) -> None:
@@ -247,7 +227,8 @@ def run(manifest: str | os.PathLike, outdir: str | os.PathLike, defaults: list[s
             if summary["status"] == "failed":
                 print(f"symblend: {row.mesh.name}: {summary['error']}", file=sys.stderr)
             if progress:
-                _progress(done, len(rows), row, summary["status"])
+                _terminal_progress(100.0 * done / len(rows), f"{done}/{len(rows)} specimens, last: {row.mesh.name} "
+                                                              f"{summary['status']}")
     ordered = [summaries[row] for row in rows]
     _write_summary(outdir / "summary.csv", ordered)
     _write_study_landmarks(outdir / "landmarks.tps", ordered)

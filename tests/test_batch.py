@@ -140,14 +140,13 @@ def test_batch_command_errors(tmp_path, capsys, monkeypatch):
 
 
 def test_an_unexpected_failure_of_one_row_is_reported_not_raised(study, monkeypatch):
-    import filter_symblend.cli as cli
-    from filter_symblend.batch import run_row
+    import filter_symblend.batch as batch
     manifest, folder = study
     [row, *_] = read_manifest(manifest, folder / "unexpected")
 
     def broken(args, progress=None):
         raise RuntimeError("disk on fire")
 
-    monkeypatch.setattr(cli, "symmetrize_files", broken)
-    summary = run_row(row)
+    monkeypatch.setattr(batch, "symmetrize_files", broken)
+    summary = batch.run_row(row)
     assert summary["status"] == "failed" and summary["error"] == "unexpected RuntimeError: disk on fire (please report it)"
