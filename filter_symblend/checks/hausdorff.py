@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pymeshlab
-from scipy.spatial import cKDTree
 
-from ..core.mirror_fill import closest_points_on_surface
+from ..core.mirror_fill import distances_to_surface
+from .surface_asymmetry import evenly
 
 # Vertices, evenly strided, sampled on each surface for the two-way distance. Closest points on a
 # centroid KD-tree cost the same whatever the distance; MeshLab's grid slows down on far samples
@@ -15,20 +15,13 @@ from ..core.mirror_fill import closest_points_on_surface
 HAUSDORFF_SAMPLES = 20_000
 
 
-def _one_way(queries: np.ndarray, points: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    if len(faces) == 0:
-        return cKDTree(points).query(queries)[0]
-    return np.linalg.norm(closest_points_on_surface(points, faces, queries) - queries, axis=1)
-
-
 def two_way_distance(a: np.ndarray, a_faces: np.ndarray, b: np.ndarray, b_faces: np.ndarray,
                      samples: int = HAUSDORFF_SAMPLES) -> dict[str, float]:
     """max, mean and RMS of the distance (mesh units) from at most ``samples`` evenly strided vertices of
     each surface ``(points (N, 3), faces (F, 3))`` to the other (max: the larger direction; mean, RMS:
     their average), and ``samples`` used per surface. A point cloud (no faces) is its points."""
-    from .surface_asymmetry import evenly
-
-    directions = [_one_way(evenly(a, samples), b, b_faces), _one_way(evenly(b, samples), a, a_faces)]
+    directions = [distances_to_surface(b, b_faces, evenly(a, samples)),
+                  distances_to_surface(a, a_faces, evenly(b, samples))]
     return {"max": float(max(d.max() for d in directions)),
             "mean": float(np.mean([d.mean() for d in directions])),
             "rms": float(np.mean([np.sqrt(np.mean(d**2)) for d in directions])),

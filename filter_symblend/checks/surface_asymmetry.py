@@ -16,7 +16,7 @@ from scipy.spatial import cKDTree
 
 from ..core.geometry import MirrorPlane, flat_normal, hemisphere_directions, normalize, reflection_across_plane
 from ..core.landmark_asymmetry import MirrorFit, fit_mirror_plane
-from ..core.mirror_fill import closest_points_on_surface
+from ..core.mirror_fill import distances_to_surface
 
 ICP_SAMPLES = 10000  # vertices used to refine the best plane
 ICP_ITERATIONS = 40
@@ -156,11 +156,8 @@ def mirror_distances(points: np.ndarray, faces: np.ndarray, normal, offset: floa
     """Distance (Q,) from each query (Q, 3) (default: every vertex) to the surface ``(points (N, 3), faces)``
     reflected across the plane, mesh units: the query is reflected instead, and its closest point found on
     the surface itself; on a point cloud, the nearest point."""
-    queries = points if queries is None else queries
-    mirrored = reflection_across_plane(queries, np.asarray(normal, dtype=float), offset)
-    if len(faces) == 0:
-        return cKDTree(points).query(mirrored)[0]
-    return np.linalg.norm(closest_points_on_surface(points, faces, mirrored) - mirrored, axis=1)
+    mirrored = reflection_across_plane(points if queries is None else queries, np.asarray(normal, dtype=float), offset)
+    return distances_to_surface(points, faces, mirrored)
 
 
 def mirror_asymmetry(points: np.ndarray, faces: np.ndarray, initial: MirrorFit | None = None,

@@ -73,13 +73,26 @@ def nearest_on_triangles(triangles: np.ndarray, centroid_tree: cKDTree, queries:
     return face, closest, distance
 
 
-def closest_points_on_surface(vertices: np.ndarray, faces: np.ndarray, queries: np.ndarray) -> np.ndarray:
-    """Closest point (Q, 3) on the triangle surface ``(vertices (V, 3), faces (F, 3))`` to each query
-    (see :func:`nearest_on_triangles`)."""
+def _nearest_on_surface(vertices: np.ndarray, faces: np.ndarray, queries: np.ndarray):
+    """:func:`nearest_on_triangles` on the triangle surface ``(vertices (V, 3), faces (F, 3))``."""
     triangles = vertices[faces]
     # An unbalanced tree builds 2.4x faster (0.7 s for 2 million triangles) and answers as fast.
     tree = cKDTree(triangles.mean(axis=1), balanced_tree=False, compact_nodes=False)
-    return nearest_on_triangles(triangles, tree, queries)[1]
+    return nearest_on_triangles(triangles, tree, queries)
+
+
+def closest_points_on_surface(vertices: np.ndarray, faces: np.ndarray, queries: np.ndarray) -> np.ndarray:
+    """Closest point (Q, 3) on the triangle surface ``(vertices (V, 3), faces (F, 3))`` to each query
+    (see :func:`nearest_on_triangles`)."""
+    return _nearest_on_surface(vertices, faces, queries)[1]
+
+
+def distances_to_surface(vertices: np.ndarray, faces: np.ndarray, queries: np.ndarray) -> np.ndarray:
+    """Distance (Q,) from each query (Q, 3) to the surface ``(vertices (V, 3), faces (F, 3))``, mesh units;
+    without faces (a point cloud), to its nearest point."""
+    if len(faces) == 0:
+        return cKDTree(vertices).query(queries)[0]
+    return _nearest_on_surface(vertices, faces, queries)[2]
 
 
 def fill_from_mirror(points: np.ndarray, faces: np.ndarray, missing: np.ndarray, plane_normal,
