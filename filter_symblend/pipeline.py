@@ -95,24 +95,24 @@ def symmetrize(points, left=None, right=None, pair_ids=None, midline=None, left_
     options = validate_parameters(params, ARRAYS)
     points = check_points(points)
     faces = _faces(faces, len(points))
+    excluded = _excluded_vertices(auto_excluded, len(points), options["pairs"])
     region = _missing(missing, missing_faces, points, faces)
     if region is None:
         return _symmetrize(points, left, right, pair_ids, midline, left_weights, right_weights, progress, faces,
-                           auto_excluded, auto_config, options)
+                           excluded, auto_config, options)
     if options["pairs"] != "landmarks":  # a missing part's pairs would pull the intact side toward it
-        mask = np.zeros(len(points), dtype=bool)
-        mask[_excluded_vertices(auto_excluded, len(points), options["pairs"]) if auto_excluded is not None else []] = True
-        auto_excluded = mask | (region[0] > 0)
+        excluded = np.union1d(np.zeros(0, dtype=np.int64) if excluded is None else excluded,
+                              np.flatnonzero(region[0] > 0))
     result = _symmetrize(points, left, right, pair_ids, midline, left_weights, right_weights, progress, faces,
-                         auto_excluded, auto_config, {**options, "output_frame": "input"})
+                         excluded, auto_config, {**options, "output_frame": "input"})
     return _filled(result, points, faces, *region, options["output_frame"])
 
 
 def _symmetrize(points, left, right, pair_ids, midline, left_weights, right_weights, progress, faces,
-                auto_excluded, auto_config, options) -> SymmetrizationResult:
+                excluded, auto_config, options) -> SymmetrizationResult:
+    """The run for checked ``points``, ``faces`` and ``excluded`` vertex indices (k,) or None."""
     if progress is not None:
         progress(0.0, "checking the input")
-    excluded = _excluded_vertices(auto_excluded, len(points), options["pairs"])
     core = {key: value for key, value in options.items() if key in validate_parameters({}, CORE)}
     given = left is not None or right is not None or midline is not None
     if options["pairs"] == "auto":
