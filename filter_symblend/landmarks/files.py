@@ -314,14 +314,20 @@ def _chosen(specimens: list[_Specimen], path: str, specimen: str | int | None) -
                             f"(by ID, or by index 1..{len(specimens)}).")
 
 
+def _specimen_landmarks(chosen: _Specimen, where) -> LandmarkSet:
+    """A specimen's landmarks, named 1..k, its scale applied; ``where(k)`` names landmark k's place in
+    messages."""
+    landmarks = []
+    for index, row in enumerate(chosen.rows, start=1):
+        position, placed = _position(row, where(index))
+        landmarks.append(Landmark(str(index), tuple(chosen.scale * v for v in position), placed))
+    return LandmarkSet(landmarks)
+
+
 def read_tps(text: str, path: str, specimen: str | int | None = None) -> LandmarkSet:
     """One specimen of a TPS file (see the module docstring): landmarks named 1..k, SCALE applied."""
     chosen = _chosen(_tps_specimens(text, path), path, specimen)
-    landmarks = []
-    for index, row in enumerate(chosen.rows, start=1):
-        position, placed = _position(row, f"{path}, line {chosen.line + index}")
-        landmarks.append(Landmark(str(index), tuple(chosen.scale * v for v in position), placed))
-    return LandmarkSet(landmarks)
+    return _specimen_landmarks(chosen, lambda index: f"{path}, line {chosen.line + index}")
 
 
 def _write_tps(landmarks: LandmarkSet, identifier: str = "specimen") -> str:
@@ -378,11 +384,7 @@ def _nts_specimens(text: str, path: str) -> list[_Specimen]:
 def read_nts(text: str, path: str, specimen: str | int | None = None) -> LandmarkSet:
     """One specimen of an NTS file (see :func:`_nts_specimens`): landmarks named 1..k."""
     chosen = _chosen(_nts_specimens(text, path), path, specimen)
-    landmarks = []
-    for index, row in enumerate(chosen.rows, start=1):
-        position, placed = _position(row, f"{path}, line {chosen.line}, landmark {index}")
-        landmarks.append(Landmark(str(index), position, placed))
-    return LandmarkSet(landmarks)
+    return _specimen_landmarks(chosen, lambda index: f"{path}, line {chosen.line}, landmark {index}")
 
 
 def _write_nts(landmarks: LandmarkSet) -> str:
