@@ -30,6 +30,7 @@ ASYMMETRY_FIELDS = ("landmark_asymmetry_before", "landmark_asymmetry_after", "mi
 SUMMARY_FIELDS = ("mesh", "status", "seconds", *ASYMMETRY_FIELDS, "output", "error")
 PATH_COLUMNS = ("mesh", "landmarks", "pair_table")
 OUTPUT_OPTIONS = ("output", "report", "overwrite", "help")  # set by the batch, not by a row
+SCHEDULER_TIMEOUT = 30  # seconds to wait for a Dask scheduler to answer
 TRUE_WORDS = {"1", "true", "yes", "y", "x"}
 FALSE_WORDS = {"", "0", "false", "no", "n"}
 
@@ -174,7 +175,7 @@ def _dask(rows: list[Row], scheduler: str):
         raise SymblendError("--scheduler runs the rows on a Dask cluster, and dask.distributed is not installed; "
                             "pip install 'filter-symblend[cluster]'.") from None
     try:
-        client = Client(scheduler, timeout=30)
+        client = Client(scheduler, timeout=SCHEDULER_TIMEOUT)
     except (OSError, TimeoutError) as error:
         raise SymblendError(f"--scheduler {scheduler}: no Dask scheduler answers there ({error}).") from None
     with client:

@@ -150,3 +150,19 @@ def test_an_unexpected_failure_of_one_row_is_reported_not_raised(study, monkeypa
     monkeypatch.setattr(batch, "symmetrize_files", broken)
     summary = batch.run_row(row)
     assert summary["status"] == "failed" and summary["error"] == "unexpected RuntimeError: disk on fire (please report it)"
+
+
+def test_more_batch_errors(tmp_path, study, capsys, monkeypatch):
+    import filter_symblend.batch as batch
+    pytest.importorskip("dask.distributed")
+    manifest, folder = study
+    with pytest.raises(SymblendError, match=r"nothere.csv: cannot be read \(No such file or directory\)"):
+        read_manifest(tmp_path / "nothere.csv", tmp_path)
+    monkeypatch.setattr(batch, "SCHEDULER_TIMEOUT", 2)
+    with pytest.raises(SymblendError, match=r"--scheduler tcp://127.0.0.1:9: no Dask scheduler answers there"):
+        run(manifest, tmp_path / "out", scheduler="tcp://127.0.0.1:9")
+    (tmp_path / "m.csv").write_text(f"mesh,landmarks,mode\n{folder / 'cow_a.ply'},{folder / 'cow_a.pp'},stretchy\n")
+    [row] = read_manifest(tmp_path / "m.csv", tmp_path / "out")
+    summary = batch.run_row(row)  # a bad option value fails its row, with argparse's own words
+    assert summary["status"] == "failed"
+    assert summary["error"] == "argument --mode: invalid choice: 'stretchy' (choose from 'standard', 'affine', 'articulated')"

@@ -585,3 +585,14 @@ def test_help_texts_say_what_each_command_takes(capsys):
     text = capsys.readouterr().out
     assert "--pairs" not in text and "for scripts whose filter uses landmarks" in " ".join(text.split())
     assert PARAMETERS_BY_NAME["width_spacing"].range_text() == "[0, inf)"  # inf itself is not a width
+
+
+def test_a_loaded_mesh_with_non_finite_coordinates_is_refused(tmp_path):
+    """pymeshlab's readers drop such vertices (the header count then catches it); whatever reader keeps
+    one, the check names it."""
+    from filter_symblend import SymblendError
+    from filter_symblend.command_files import check_loaded_mesh
+    points = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, np.inf, 0.0]])
+    with pytest.raises(SymblendError, match=r"scan.stl: vertex 2 has non-finite coordinates \(1 such vertices\); "
+                                            r"repair the mesh"):
+        check_loaded_mesh(tmp_path / "scan.stl", points, np.array([[0, 1, 2]]))
