@@ -231,6 +231,12 @@ def _damaged_ply(path: pathlib.Path) -> pathlib.Path:
     return path
 
 
+def _damaged_off(path: pathlib.Path) -> pathlib.Path:
+    """An OFF tetrahedron with a fifth vertex 'nan nan nan'."""
+    path.write_text("OFF\n5 4 0\n0 0 0\nnan nan nan\n1 0 0\n0 1 0\n0 0 1\n3 0 3 2\n3 0 2 4\n3 2 3 4\n3 0 4 3\n")
+    return path
+
+
 def _probe_arguments(tmp_path, mesh_path, landmark_path):
     """(name, arguments, the one-line error expected): bad outputs and damaged meshes, each refused before
     any computation."""
@@ -240,6 +246,8 @@ def _probe_arguments(tmp_path, mesh_path, landmark_path):
         ("output is a folder", ["-o", str(tmp_path)], r"is a folder; give the output mesh a file name"),
         ("nan vertex in a PLY", ["-o", str(tmp_path / "out.ply"), "INPUT", str(_damaged_ply(tmp_path / "nan.ply"))],
          r"nan.ply: the file declares 5 vertices and 4 could be read"),
+        ("nan vertex in an OFF", ["-o", str(tmp_path / "out.ply"), "INPUT", str(_damaged_off(tmp_path / "nan.off"))],
+         r"nan.off: the file declares 5 vertices and 4 could be read"),
         ("no extension", ["-o", str(tmp_path / "out")], r"out: no extension; the output mesh needs one pymeshlab "
                                                           r"writes: .*\.ply"),
         ("unknown extension", ["-o", str(tmp_path / "out.xyzzy")], r"out.xyzzy: the extension '.xyzzy'"),
