@@ -1,5 +1,7 @@
 """Every bad input raises a SymblendError naming the problem and the fix; nothing changes."""
 
+import threading
+
 import numpy as np
 import pymeshlab
 import pytest
@@ -252,3 +254,30 @@ def test_failure_while_building_the_layer_leaves_the_meshset_as_it_was(cow, monk
         ms.generate_symmetrized_mesh()
     assert_unchanged(ms, before)
     assert filter_symblend.FILTER_NAME == "generate_symmetrized_mesh"
+
+
+def test_failure_of_a_check_beside_the_layer_removes_the_layer(cow, monkeypatch):
+    """The checks run in a thread while the layer is built: if one fails once the layer exists, the
+    layer goes too, and the check's own error reaches the caller."""
+    from filter_symblend.meshlab import meshset_filter
+
+    left, right = cow.landmarks(40)
+    ms = meshset_with_pairs(cow.points, cow.faces, left, right)
+    before = snapshot(ms)
+    normals_done = threading.Event()  # the layer's last MeshLab filter has run
+    compute_normals = pymeshlab.MeshSet.compute_normal_per_vertex
+
+    def normals_then_signal(self, *args, **kwargs):
+        compute_normals(self, *args, **kwargs)
+        normals_done.set()
+
+    def failing_check(*args, **kwargs):
+        assert normals_done.wait(timeout=60)
+        raise MemoryError("simulated failure of a check")
+
+    monkeypatch.setattr(pymeshlab.MeshSet, "compute_normal_per_vertex", normals_then_signal)
+    monkeypatch.setattr(meshset_filter, "_mirror_check", failing_check)
+    with pytest.raises(MemoryError, match="simulated failure of a check"):
+        ms.generate_symmetrized_mesh()
+    assert normals_done.is_set()
+    assert_unchanged(ms, before)

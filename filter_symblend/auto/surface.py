@@ -21,7 +21,7 @@ from scipy.spatial import cKDTree
 
 from ..core.geometry import flat_normal, normalize
 from ..core.mesh_quantities import vertex_normals
-from ..core.mirror_fill import nearest_on_triangles
+from ..core.mirror_fill import TriangleSurface
 
 POINT_CLOUD_NEIGHBOURS = 8  # neighbours whose mean distance is a point cloud's local spacing
 
@@ -120,12 +120,8 @@ class Surface:
         return vertex_adjacency(self.faces[self.triangles], len(self.points))
 
     @functools.cached_property
-    def _triangle_corners(self) -> np.ndarray:
-        return self.points[self.faces[self.triangles]]
-
-    @functools.cached_property
-    def _centroid_tree(self) -> cKDTree:
-        return cKDTree(self._triangle_corners.mean(axis=1), balanced_tree=False, compact_nodes=False)
+    def _triangle_surface(self) -> TriangleSurface:
+        return TriangleSurface(self.points, self.faces[self.triangles])
 
     def nearest_points(self, queries: np.ndarray):
         """Where the surface is nearest each query (Q, 3): (point (Q, 3), distance (Q,), unit normal
@@ -138,7 +134,7 @@ class Surface:
             weights = np.zeros((len(queries), 3))
             weights[:, 0] = 1.0
             return self.points[vertex], distance, self.normals[vertex], corners, weights
-        face, point, distance = nearest_on_triangles(self._triangle_corners, self._centroid_tree, queries)
+        face, point, distance = self._triangle_surface.nearest(queries)
         corners = self.faces[self.triangles[face]]
         return point, distance, self.face_normals[face], corners, barycentric(self.points[corners], point)
 

@@ -5,13 +5,15 @@ The input layer is never modified. The output is built from a copy of the
 input (so colours, UVs, textures and selection survive), its coordinates and
 quality set through MeshLab's own per-vertex function filters, then copied once
 more to drop the scratch attributes (pymeshlab cannot delete attributes; the
-copy drops custom attributes). On any failure every layer the filter added is
-deleted and the input is current again.
+copy drops custom attributes). The before/after checks run in a second thread
+beside the warp and the layer building. On any failure, a check's included,
+every layer the filter added is deleted and the input is current again.
 """
 
 from __future__ import annotations
 
 import hashlib
+from concurrent.futures import Future, ThreadPoolExecutor
 import inspect
 import warnings
 
@@ -23,7 +25,8 @@ from ..checks.hausdorff import two_way_distance
 from ..checks.surface_asymmetry import CHECK_SAMPLES, mirror_asymmetry, refine_mirror_plane
 from ..core.geometry import MirrorPlane
 from ..core.landmark_asymmetry import fit_mirror_plane
-from ..core.symmetrize import SymmetrizationResult
+from ..core.landmark_pairs import check_points
+from ..core.symmetrize import check_landmarks
 from ..errors import MeshSetError, ParameterError, SymblendWarning
 from ..parameters import PARAMETERS, keyword_signature, parameters_doc, validate_parameters
 from ..pipeline import symmetrize
@@ -36,7 +39,10 @@ _SCRATCH = ("symblend_scratch_x", "symblend_scratch_y", "symblend_scratch_z",
             "symblend_scratch_quality")
 
 
-def _add_output_layer(ms: pymeshlab.MeshSet, input_id: int, result, carried: dict) -> int:
+def _add_output_layer(ms: pymeshlab.MeshSet, input_id: int, result, carried: dict,
+                      pending: list[Future] = ()) -> int:
+    """Add the output layer; the id of the new layer. ``pending``: work running beside it, waited for
+    too; if it fails, the layer is removed as for a failure of its own."""
     created = []
     try:
         ms.set_current_mesh(input_id)
@@ -62,6 +68,8 @@ def _add_output_layer(ms: pymeshlab.MeshSet, input_id: int, result, carried: dic
         ms.set_current_mesh(created.pop(0))
         ms.delete_current_mesh()
         ms.set_current_mesh(output_id)
+        for work in pending:
+            work.result()
         return output_id
     except BaseException:
         for mesh_id in created:
@@ -116,42 +124,58 @@ def _fingerprint(mesh: pymeshlab.Mesh, options: dict) -> str:
     return digest.hexdigest()
 
 
-def _compute(mesh: pymeshlab.Mesh, options: dict, progress) -> SymmetrizationResult:
-    """The whole computation for ``mesh`` (warp, fill, mirror asymmetry before and after); no layer added."""
+def _mirror_check(points: np.ndarray, faces: np.ndarray, plane: MirrorPlane) -> dict:
+    """Mirror asymmetry of the surface (points (N, 3), faces) across ``plane``, without per-vertex values."""
+    measured = mirror_asymmetry(points, faces, plane=plane, samples=CHECK_SAMPLES)
+    return {k: v for k, v in measured.items() if k != "per_vertex"}
+
+
+def _landmark_plane_check(points: np.ndarray, faces: np.ndarray, left: np.ndarray, right: np.ndarray) -> dict:
+    """:func:`_mirror_check` of the input against its plane refined from the landmark pairs' plane."""
+    start = fit_mirror_plane(points[left], points[right])
+    return _mirror_check(points, faces, refine_mirror_plane(points, start.normal, start.offset))
+
+
+def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExecutor):
+    """(the warp of ``mesh`` with the fill of its missing region, {report key: future} of its checks); no
+    layer added. The checks run in ``pool``: the input's from the start (its plane comes from the landmark
+    pairs, or from the automatic pairing), the output's once the warp is known."""
     region = _missing_region(mesh, options["missing_region"], options["weight_attribute"])
     core = {p.name: options[p.name] for p in PARAMETERS if p.layer != "meshset"}
     points, faces = mesh.vertex_matrix(), mesh.face_matrix()
     missing, missing_faces = (None, None) if region is None else region
-    automatic = options["pairs"] == "auto"
-    if automatic:  # the landmark attributes are not read
+    checks = {}
+    if options["pairs"] == "auto":  # the landmark attributes are not read
         result = symmetrize(points, progress=progress, faces=faces, missing=missing, missing_faces=missing_faces,
                             **core)
+        surface = result.report["auto_pairs"]["surface_plane"]  # refined by the pairing already
+        if options["checks"] != "none":
+            checks["mirror_asymmetry_before"] = pool.submit(
+                _mirror_check, points, faces, MirrorPlane(np.array(surface["normal"]), surface["offset"]))
     else:
         names = {name: options[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
         pairs = read_landmark_attributes(mesh, **names)
+        if options["checks"] != "none":  # beside the warp, once the pairs pass the warp's own checks
+            check_landmarks(check_points(points), pairs.left, pairs.right, pairs.ids, pairs.midline,
+                            pairs.left_weights, pairs.right_weights)
+            checks["mirror_asymmetry_before"] = pool.submit(_landmark_plane_check, points, faces, pairs.left,
+                                                            pairs.right)
         result = symmetrize(points, pairs.left, pairs.right, pairs.ids, pairs.midline, pairs.left_weights,
                             pairs.right_weights, progress, faces, missing=missing, missing_faces=missing_faces, **core)
-    report = result.report
     if options["checks"] != "none":
-        if automatic:  # the automatic pairing fitted the input's surface plane already
-            surface = report["auto_pairs"]["surface_plane"]
-            input_plane = MirrorPlane(np.array(surface["normal"]), surface["offset"])
-        else:
-            landmarks = fit_mirror_plane(points[pairs.left], points[pairs.right])
-            input_plane = refine_mirror_plane(points, landmarks.normal, landmarks.offset)
-        before = mirror_asymmetry(points, faces, plane=input_plane, samples=CHECK_SAMPLES)
-        after = mirror_asymmetry(result.points, faces, samples=CHECK_SAMPLES,
-                                 plane=MirrorPlane(np.array(report["plane_normal"]), report["plane_offset"]))
-        report["mirror_asymmetry_before"] = {k: v for k, v in before.items() if k != "per_vertex"}
-        report["mirror_asymmetry_after"] = {k: v for k, v in after.items() if k != "per_vertex"}
+        plane = MirrorPlane(np.array(result.report["plane_normal"]), result.report["plane_offset"])
+        checks["mirror_asymmetry_after"] = pool.submit(_mirror_check, result.points, faces, plane)
     if options["checks"] == "full":
-        report["hausdorff_input_output"] = two_way_distance(points, faces, result.points, faces)
-    return result
+        checks["hausdorff_input_output"] = pool.submit(two_way_distance, points, faces, result.points, faces)
+    return result, checks
 
 
 def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict | None = None) -> dict:
     """``generate_symmetrized_mesh`` with an optional result ``cache`` (fingerprint -> result), so a
-    script rehearsed on a copy of the MeshSet does not compute the same warp twice."""
+    script rehearsed on a copy of the MeshSet does not compute the same warp twice.
+
+    The before/after checks (numpy and scipy) run in a second thread beside the warp and beside
+    MeshLab's filters building the output layer (which release the GIL), so they add little time."""
     options = validate_parameters(params)
     if ms.mesh_number() == 0:
         raise MeshSetError(
@@ -164,16 +188,20 @@ def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict |
         raise ParameterError(
             f"`pair_attribute`, `midline_attribute` and `weight_attribute` must be three different "
             f"names, none of them `{ASYMMETRY_ATTRIBUTE}` (the filter writes it); got {', '.join(names)}.")
-    if cache is None:
-        result = _compute(mesh, options, progress)
-    else:
-        key = _fingerprint(mesh, options)
-        if key not in cache:
-            cache[key] = _compute(mesh, options, progress)
-        result = cache[key]
+    key = None if cache is None else _fingerprint(mesh, options)
+    result = None if cache is None else cache.get(key)
     carried = {name: values for name in names if (values := optional_attribute(mesh, name)) is not None}
-    with recording.recorded_call(ms, options):  # our native steps, saved as one node of ours
-        output_id = _add_output_layer(ms, input_id, result, carried)
+    if result is not None:
+        with recording.recorded_call(ms, options):  # our native steps, saved as one node of ours
+            output_id = _add_output_layer(ms, input_id, result, carried)
+    else:
+        with ThreadPoolExecutor(max_workers=1) as pool:
+            result, checks = _compute(mesh, options, progress, pool)
+            with recording.recorded_call(ms, options):
+                output_id = _add_output_layer(ms, input_id, result, carried, list(checks.values()))
+        result.report.update({name: check.result() for name, check in checks.items()})
+        if cache is not None:
+            cache[key] = result
     return {**result.report, "input_mesh_id": input_id, "output_mesh_id": output_id}
 
 
