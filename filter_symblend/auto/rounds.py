@@ -61,14 +61,13 @@ def _spread(points: np.ndarray, vertices: np.ndarray, count: int) -> np.ndarray:
     return vertices[np.sort(first)]
 
 
-def _first_map(surface: Surface, config: AutoConfig, progress) -> tuple[MirrorMap, dict, tuple]:
-    """The map that mirrors the most of the surface, its coverage of each map tried, and the input's mirror
-    plane; SymmetryNotFoundError when none mirrors enough. Tried in turn, until one mirrors
+def _first_map(surface: Surface, sources: np.ndarray, config: AutoConfig, progress) -> tuple[MirrorMap, dict, tuple]:
+    """The map that mirrors the most of the surface (measured at the vertices ``sources``), its coverage of each
+    map tried, and the input's mirror plane; SymmetryNotFoundError when none mirrors enough. Tried in turn, until one mirrors
     ``plane_suffices`` of the surface: the best mirror plane; the whitened one; registrations started from
     each of these and from the next best planes (compared on half the samples, the best one redone on all);
     the mirror map of the tessellation."""
     planes = surface_mirror_planes(surface.points[surface.usable_index])
-    sources = _spread(surface.points, surface.usable_index, SCREEN_SOURCES)
     tolerance = config.landing_tolerance * surface.diagonal
     tried: list[tuple[MirrorMap, float]] = []
 
@@ -312,7 +311,7 @@ def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, l
     scored = _spread(points, surface.usable_index, SCREEN_SOURCES)
     report = {"excluded_vertices": int(0 if excluded is None else len(excluded))}
     if landmarks is None:
-        mirror, coverage, plane = _first_map(surface, config, scaled_progress(progress, 0.0, 20.0))
+        mirror, coverage, plane = _first_map(surface, scored, config, scaled_progress(progress, 0.0, 20.0))
         report.update(coverage=coverage, surface_plane={"normal": plane[0].tolist(), "offset": plane[1]})
         result, best = None, np.inf
     else:

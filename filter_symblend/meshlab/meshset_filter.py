@@ -13,9 +13,9 @@ every layer the filter added is deleted and the input is current again.
 from __future__ import annotations
 
 import hashlib
-from concurrent.futures import Future, ThreadPoolExecutor
 import inspect
 import warnings
+from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 import pymeshlab
