@@ -1,6 +1,7 @@
 """Every bad input raises a SymblendError naming the problem and the fix; nothing changes."""
 
 import threading
+import warnings
 
 import numpy as np
 import pymeshlab
@@ -48,10 +49,14 @@ def labels_for(n_vertices, left, right):
 
 
 def run_and_expect(ms, error, pattern, **params):
+    """The filter raises ``error`` matching ``pattern``, leaves ``ms`` as it was, and no numpy warning
+    comes before the error (from any thread: the checks run beside the warp)."""
     before = snapshot(ms)
-    with pytest.raises(error, match=pattern) as info:
+    with warnings.catch_warnings(record=True) as caught, pytest.raises(error, match=pattern) as info:
+        warnings.simplefilter("always")
         ms.generate_symmetrized_mesh(**params)
     assert isinstance(info.value, SymblendError) and isinstance(info.value, ValueError)
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in caught]
     assert_unchanged(ms, before)
 
 

@@ -62,11 +62,11 @@ def _spread(points: np.ndarray, vertices: np.ndarray, count: int) -> np.ndarray:
 
 
 def _first_map(surface: Surface, sources: np.ndarray, config: AutoConfig, progress) -> tuple[MirrorMap, dict, tuple]:
-    """The map that mirrors the most of the surface (measured at the vertices ``sources``), its coverage of each
-    map tried, and the input's mirror plane; SymmetryNotFoundError when none mirrors enough. Tried in turn, until one mirrors
-    ``plane_suffices`` of the surface: the best mirror plane; the whitened one; registrations started from
-    each of these and from the next best planes (compared on half the samples, the best one redone on all);
-    the mirror map of the tessellation."""
+    """The map that mirrors the most of the surface (measured at the vertices ``sources``), its coverage of
+    each map tried, and the input's mirror plane; SymmetryNotFoundError when none mirrors enough. Tried in
+    turn, until one mirrors ``plane_suffices`` of the surface: the best mirror plane; the whitened one;
+    registrations started from each of these and from the next best planes (compared on half the samples,
+    the best one redone on all); the mirror map of the tessellation."""
     planes = surface_mirror_planes(surface.points[surface.usable_index])
     tolerance = config.landing_tolerance * surface.diagonal
     tried: list[tuple[MirrorMap, float]] = []
