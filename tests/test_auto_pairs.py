@@ -331,8 +331,27 @@ def test_excluded_vertices_do_not_pull_the_sound_side_toward_them(cow):
     print("sound twins moved (edges), paired / excluded:", moved)
     assert moved[1] < moved[0] / 10
     assert excluded.report["auto_pairs"]["excluded_vertices"] == np.count_nonzero(patch)
-    same = symmetrize(dented, faces=cow.faces, pairs="auto", mode="affine", auto_excluded=np.flatnonzero(patch))
-    np.testing.assert_array_equal(same.points, excluded.points)  # a mask or indices
+
+
+def test_excluded_vertices_as_a_mask_or_as_indices_reach_the_pairing_the_same(cow, monkeypatch):
+    from filter_symblend import pipeline
+
+    class Reached(Exception):
+        pass
+
+    reached = []
+
+    def pairing(points, faces, options, landmarks, excluded, *rest):
+        reached.append(excluded)
+        raise Reached
+
+    monkeypatch.setattr(pipeline, "symmetrize_automatic", pairing)
+    patch = cow.points[:, 1] > np.quantile(cow.points[:, 1], 0.9)
+    for given in (patch, np.flatnonzero(patch)[::-1]):
+        with pytest.raises(Reached):
+            symmetrize(cow.points, faces=cow.faces, pairs="auto", auto_excluded=given)
+    np.testing.assert_array_equal(reached[0], np.flatnonzero(patch))
+    np.testing.assert_array_equal(reached[1], np.flatnonzero(patch))
 
 
 def test_a_missing_region_is_left_out_of_the_automatic_pairs_and_filled_from_the_sound_side(cow):
