@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pymeshlab
 
-from ..core.landmark_asymmetry import MirrorFit, fit_mirror_plane
+from ..core.landmark_asymmetry import MirrorFit
 from ..core.landmark_pairs import pairs_from_attribute
 from ..meshlab.attributes import optional_attribute
 from ..parameters import DEFAULTS
 from .hausdorff import two_way_distance
-from .surface_asymmetry import CHECK_SAMPLES, fit_surface_mirror_plane, mirror_asymmetry, refine_mirror_plane
+from .surface_asymmetry import CHECK_SAMPLES, fit_surface_mirror_plane, mirror_asymmetry, mirror_plane_from_pairs
 
 
 def _mirror_plane(mesh: pymeshlab.Mesh, pair_attribute: str, start) -> tuple[np.ndarray, float]:
@@ -20,8 +20,7 @@ def _mirror_plane(mesh: pymeshlab.Mesh, pair_attribute: str, start) -> tuple[np.
     labels = optional_attribute(mesh, pair_attribute)
     if labels is not None and np.count_nonzero(labels) >= 6:
         pairs = pairs_from_attribute(labels, pair_attribute)
-        fit = fit_mirror_plane(points[pairs.left], points[pairs.right])
-        return refine_mirror_plane(points, fit.normal, fit.offset)
+        return mirror_plane_from_pairs(points, pairs.left, pairs.right)
     return fit_surface_mirror_plane(points, None if start is None else MirrorFit(*start, np.zeros(0)))
 
 

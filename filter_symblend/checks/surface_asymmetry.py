@@ -120,14 +120,15 @@ def surface_mirror_planes(points: np.ndarray, initial: MirrorFit | None = None,
     return distinct
 
 
-def refine_mirror_plane(points: np.ndarray, normal, offset: float) -> MirrorPlane:
-    """The mirror plane of a point set (N, 3) reached by reflection ICP from one
-    known plane (e.g. the landmarks'), on SCREEN_SAMPLES evenly strided vertices: a plane to measure
-    asymmetry against, at a small fixed cost whatever the mesh size."""
+def mirror_plane_from_pairs(points: np.ndarray, left: np.ndarray, right: np.ndarray) -> MirrorPlane:
+    """The mirror plane of a point set (N, 3) reached by reflection ICP from the plane of its landmark pairs
+    (vertex indices ``left[k]``, ``right[k]``), on SCREEN_SAMPLES evenly strided vertices: a plane to
+    measure asymmetry against, at a small fixed cost whatever the mesh size."""
+    pairs = fit_mirror_plane(points[left], points[right])
     flat = flat_normal(points)
     sample = evenly(points, SCREEN_SAMPLES)
-    start = _in_plane(normalize(np.asarray(normal, dtype=float)), flat)
-    normal, offset, _ = _refine_plane(sample, cKDTree(sample), start, float(offset), flat)
+    start = _in_plane(normalize(pairs.normal), flat)
+    normal, offset, _ = _refine_plane(sample, cKDTree(sample), start, float(pairs.offset), flat)
     return MirrorPlane(normal, float(offset))
 
 

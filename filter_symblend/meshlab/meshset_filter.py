@@ -22,9 +22,8 @@ import pymeshlab
 
 from . import recording
 from ..checks.hausdorff import two_way_distance
-from ..checks.surface_asymmetry import CHECK_SAMPLES, mirror_asymmetry, refine_mirror_plane
+from ..checks.surface_asymmetry import CHECK_SAMPLES, mirror_asymmetry, mirror_plane_from_pairs
 from ..core.geometry import MirrorPlane
-from ..core.landmark_asymmetry import fit_mirror_plane
 from ..core.landmark_pairs import check_points
 from ..core.symmetrize import check_landmarks
 from ..errors import MeshSetError, ParameterError, SymblendWarning
@@ -132,8 +131,7 @@ def _mirror_check(points: np.ndarray, faces: np.ndarray, plane: MirrorPlane) -> 
 
 def _landmark_plane_check(points: np.ndarray, faces: np.ndarray, left: np.ndarray, right: np.ndarray) -> dict:
     """:func:`_mirror_check` of the input against its plane refined from the landmark pairs' plane."""
-    start = fit_mirror_plane(points[left], points[right])
-    return _mirror_check(points, faces, refine_mirror_plane(points, start.normal, start.offset))
+    return _mirror_check(points, faces, mirror_plane_from_pairs(points, left, right))
 
 
 def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExecutor):
