@@ -406,14 +406,14 @@ def _outline_distances(points: np.ndarray, faces: np.ndarray, normal, offset) ->
     """A flat mesh's asymmetry is its outline's: distance from each boundary vertex to the reflected
     boundary (edges used by one triangle), by closest points on the edges as thin triangles."""
     from filter_symblend.core.geometry import reflection_across_plane
-    from filter_symblend.core.mirror_fill import closest_points_on_surface
+    from filter_symblend.core.mirror_fill import distances_to_surface
     edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
     unique, counts = np.unique(edges, axis=0, return_counts=True)
     boundary = unique[counts == 1]
     mirrored = reflection_across_plane(points, np.asarray(normal), offset)
     segments = np.column_stack([boundary, boundary[:, 1]])  # degenerate triangles: the edges themselves
     vertices = np.unique(boundary)
-    return np.linalg.norm(closest_points_on_surface(mirrored, segments, points[vertices]) - points[vertices], axis=1)
+    return distances_to_surface(mirrored, segments, points[vertices])
 
 
 def mirror_statistics(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -435,12 +435,12 @@ def mirror_statistics(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
 def surface_hausdorff(before: np.ndarray, after: np.ndarray, faces: np.ndarray) -> float:
     """Two-way Hausdorff distance between two embeddings of one mesh, sampled at the referenced vertices,
     % of the diagonal."""
-    from filter_symblend.core.mirror_fill import closest_points_on_surface
+    from filter_symblend.core.mirror_fill import distances_to_surface
     used = _referenced(faces, len(before))
     if not len(faces):
         return 100 * float(np.abs(before - after).max()) / np.linalg.norm(np.ptp(before, axis=0))
-    one = np.linalg.norm(closest_points_on_surface(after, faces, before[used]) - before[used], axis=1).max()
-    other = np.linalg.norm(closest_points_on_surface(before, faces, after[used]) - after[used], axis=1).max()
+    one = distances_to_surface(after, faces, before[used]).max()
+    other = distances_to_surface(before, faces, after[used]).max()
     return 100 * max(one, other) / np.linalg.norm(np.ptp(before[used], axis=0))
 
 
