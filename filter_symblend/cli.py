@@ -124,11 +124,10 @@ def _snapped_pairs(ms, args):
     if not left_words or not right_words:
         raise SymblendError(f"--side-words {args.side_words!r}: give LEFT,.../RIGHT,..., e.g. l,left/r,right.")
     mesh = ms.current_mesh()
-    snapped = pairs_from_landmark_file(
+    return pairs_from_landmark_file(
         mesh.vertex_matrix(), mesh.face_matrix(), args.landmarks, args.pair_table,
         (tuple(left_words.split(",")), tuple(right_words.split(","))), args.midline, args.curves,
         args.curve_spacing, args.mesh_frame, args.allow_far_landmarks, args.specimen)
-    return snapped
 
 
 def _check_outputs(args, outputs: dict[str, pathlib.Path | None], inputs: list[pathlib.Path]) -> None:

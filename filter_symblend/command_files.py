@@ -71,7 +71,7 @@ def _header_counts(path: pathlib.Path) -> tuple[int | None, int | None]:
 def check_loaded_mesh(path: pathlib.Path, points: np.ndarray, faces: np.ndarray) -> None:
     """Raise SymblendError when the mesh loaded from ``path`` is not the whole file: non-finite coordinates,
     fewer vertices than the file declares (pymeshlab drops a vertex `nan nan nan` and renumbers the rest,
-    so landmarks by index would land on the wrong vertices), or most of its faces lost."""
+    so landmarks by index would land on the wrong vertices), or fewer faces than it declares."""
     bad = np.flatnonzero(~np.isfinite(points).all(axis=1))
     if bad.size:
         raise SymblendError(f"{path}: vertex {bad[0]} has non-finite coordinates ({bad.size} such vertices); "

@@ -222,7 +222,8 @@ class Outline(Surface):
 
     @functools.cached_property
     def _middle_tree(self) -> cKDTree:
-        return cKDTree(0.5 * (self.points[self.edges[:, 0]] + self.points[self.edges[:, 1]]))
+        return cKDTree(0.5 * (self.points[self.edges[:, 0]] + self.points[self.edges[:, 1]]), balanced_tree=False,
+                       compact_nodes=False)
 
     def nearest_points(self, queries: np.ndarray):
         a, b = self.points[self.edges[:, 0]], self.points[self.edges[:, 1]]
