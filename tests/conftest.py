@@ -62,6 +62,28 @@ def symmetric_mesh(request) -> GroundTruth:
     return load_ground_truth(path)
 
 
+def remeshed_ground_truth(path: os.PathLike, edge_percent: float) -> synthetic.SurfaceTruth:
+    """The exactly symmetric mesh at ``path`` remeshed isotropically (edges ``edge_percent`` of the diagonal),
+    so that no vertex has an exact twin; its twins are points of the surface."""
+    truth = load_ground_truth(path)
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=truth.points, face_matrix=truth.faces))
+    # One side's triangles split first (the surface unchanged), so that the remeshing does not mirror itself.
+    ms.compute_selection_by_condition_per_face(condselect=f"(x0 + x1 + x2) / 3 > {float(truth.offset)!r}")
+    ms.meshing_surface_subdivision_midpoint(iterations=1, threshold=pymeshlab.PercentageValue(0.0), selected=True)
+    ms.set_selection_none()
+    ms.meshing_isotropic_explicit_remeshing(iterations=6, targetlen=pymeshlab.PercentageValue(edge_percent),
+                                            featuredeg=180.0)  # no crease kept: no original vertex stays
+    ms.meshing_remove_unreferenced_vertices()
+    mesh = ms.current_mesh()
+    return synthetic.surface_truth(mesh.vertex_matrix(), mesh.face_matrix(), truth.offset)
+
+
+@pytest.fixture(scope="session")
+def remeshed_cow() -> synthetic.SurfaceTruth:
+    return remeshed_ground_truth(SAMPLE_MESHES / "cow.obj", 2.0)
+
+
 def symmetric_blob(subdivisions: int = 4):
     """An exactly mirror-symmetric closed mesh with one mirror plane (x = 0): pymeshlab's icosphere (whose
     vertex set and triangles are closed under x -> -x) with bumps even in x but not in y or z. (points, faces)"""

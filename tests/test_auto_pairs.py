@@ -229,7 +229,8 @@ def test_a_shape_without_mirror_symmetry_is_refused_saying_how_much_mirrors():
     ms.meshing_decimation_quadric_edge_collapse(targetfacenum=10000)
     mesh = ms.current_mesh()
     with pytest.raises(SymmetryNotFoundError, match=r"No mirror symmetry found: the best mirror map \(.+\) mirrors "
-                       r"\d+% of the surface within 1% of its size \(mirror plane \d+%.*needs 75%\. Place "
+                       r"\d+% of the surface within 1% of its size( but \d+% within 0.25%, where a field fitted onto the "
+                       r"surface lands on a symmetric shape)? \(mirror plane \d+%.*needs (75%|65% there)\. Place "
                        r"landmark pairs and use pairs='landmarks'") as raised:
         symmetrize(mesh.vertex_matrix(), faces=mesh.face_matrix(), pairs="auto")
     assert isinstance(raised.value, GeometryError)  # a SymblendError, a ValueError
@@ -248,7 +249,14 @@ def _corpus():
         yield path.name, ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
 
 
-def test_every_corpus_mesh_gives_a_finite_output_or_a_clear_refusal():
+# What the corpus's READMEs say of each mesh: mirror-symmetric (exactly or as a scan), or not at all; the
+# others (CAD parts, partly symmetric, the flat WoodDoll whose outline mirrors 61 % within 1 %) may go either
+# way but never give a non-finite output.
+SYMMETRIC = {"cow.obj", "spot.obj", "homer.obj", "cheburashka.obj", "igea.ply"}
+NOT_SYMMETRIC = {"bunny.obj", "stanford-bunny.obj"}
+
+
+def test_every_corpus_mesh_is_symmetrized_or_refused_as_its_symmetry_says():
     outcomes = {}
     for name, points, faces in _corpus():
         try:
@@ -261,6 +269,8 @@ def test_every_corpus_mesh_gives_a_finite_output_or_a_clear_refusal():
         outcomes[name] = "ok"
     print(outcomes)
     assert len(outcomes) >= 5  # pymeshlab's samples at least
+    assert all(outcomes[name] == "ok" for name in SYMMETRIC & set(outcomes)), outcomes
+    assert all(outcomes[name].startswith("refused: No mirror symmetry found") for name in NOT_SYMMETRIC & set(outcomes))
 
 
 def test_a_singular_system_is_an_error_not_a_non_finite_output(blob, monkeypatch):
@@ -397,11 +407,13 @@ def test_bad_faces_are_refused_naming_the_row(faces, message):
 def test_progress_covers_every_round(blob):
     points, faces = blob
     seen = []
-    symmetrize(synthetic.bend(points, 0.3), faces=faces, pairs="auto",
-               progress=lambda percent, message: seen.append((percent, message)))
+    result = symmetrize(synthetic.bend(points, 0.3), faces=faces, pairs="auto",
+                        progress=lambda percent, message: seen.append((percent, message)))
     percents = [percent for percent, _ in seen]
     assert percents == sorted(percents) and percents[-1] == 100.0
-    assert any("round 2" in message for _, message in seen)
+    rounds = [entry for entry in result.report["auto_pairs"]["rounds"] if not entry.get("final")]
+    assert rounds and all(any(f"round {k}" in message for _, message in seen) for k in range(1, len(rounds) + 1))
+    assert not any(f"round {len(rounds) + 1}" in message for _, message in seen)
 
 
 def test_auto_refuses_landmarks():

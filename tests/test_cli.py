@@ -361,7 +361,7 @@ def test_symmetrize_with_automatic_pairs_needs_no_landmark_file(tmp_path, cow, c
     printed = capsys.readouterr().out
     data = json.loads(report.read_text())
     automatic = data["auto_pairs"]
-    assert automatic["pair_count"] + automatic["midline_count"] == 800 and data["landmarks"] is None
+    assert 760 <= automatic["pair_count"] + automatic["midline_count"] <= 800 and data["landmarks"] is None
     assert f"0 landmark pairs + {automatic['pair_count']} automatic pairs" in printed
     assert "landmark asymmetry" not in printed
     assert data["mirror_asymmetry_after"]["rms"] < data["mirror_asymmetry_before"]["rms"] / 2

@@ -30,10 +30,30 @@ class AutoConfig:
         0.95, "share of the surface",
         "when one plane already mirrors this much of the surface, no non-rigid map can mirror much more: "
         "the affine and registered maps are not tried (speed)")
+    field_precision: float = _field(
+        0.25, "x landing_tolerance",
+        "a registered field is fitted onto the surface, so much of any shape lands within the landing "
+        "tolerance (80 % of a bunny); a symmetry's images land within the field's own precision, a chance "
+        "fit's spread over the whole tolerance: unless a plain map mirrors min_coverage (a scan, whose asymmetry "
+        "fills the tolerance), a field must mirror precise_coverage within this share of it")
+    precise_coverage: float = _field(
+        0.65, "share of the surface",
+        "what a registered field must mirror within field_precision of the landing tolerance: chosen between "
+        "pymeshlab's bunny (58 %) and the remeshed cow bent 1.2 rad (72 %), checked on the Stanford bunny "
+        "(53 %)")
+    field_suffices: float = _field(
+        0.98, "share of the surface",
+        "when one registered candidate already mirrors this much of the surface, the costlier ones are not "
+        "tried: what is left is a strip along the midline and the scan's own asymmetry")
     ratio: float = _field(
         0.5, "nearest / second-nearest distance",
         "a predicted twin is taken as a vertex only if that vertex is the unambiguous nearest one (Lowe's "
         "ratio test): within the inner half of its neighbourhood, whatever the local sampling")
+    vertex_precision: float = _field(
+        0.1, "x the local vertex spacing",
+        "a predicted twin is taken as a vertex only within a tenth of an edge of it: a map precise enough "
+        "finds a mirrored tessellation's twins there, while on two independently sampled sides a prediction "
+        "falls that near a vertex by chance about once in thirty")
     robust_sigmas: float = _field(
         3.0, "robust standard deviations",
         "landing distances beyond this many robust standard deviations (1.4826 x median) are not twins: "
@@ -47,28 +67,24 @@ class AutoConfig:
         12, "pairs",
         "pairs fitting each local affine mirror map: the fewest that determine an affine map (4) with "
         "room for noise, few enough to stay local")
-    vertex_twins: float = _field(
-        1 / 3, "share of the twins found",
-        "the mesh's vertices are taken to mirror each other when a third of the twins found are exact vertices "
-        "at once (unambiguous, mutual, as precise as the map); where the two sides are sampled independently "
-        "(a scan) only chance twins pass, about one in five at the most (on an outline the ratio test is first put "
-        "on a surface's odds)")
+    vertex_share: float = _field(
+        0.75, "share of the usable vertices",
+        "the vertices are taken to mirror each other when the exact-vertex growth pairs this share of them, "
+        "as much as a map must mirror to be a symmetry (min_coverage): from chance twins on two sides sampled "
+        "independently it stops near half, since their vertices miss each other's local maps")
     samples: int = _field(
         10_000, "vertices",
         "at most this many vertices, spread over the surface, are paired in each round: enough to choose "
         "the default auto_pair_count pairs from (one side of them), and the cost of a round stays bounded on "
         "million-vertex meshes")
+    score_samples: int = _field(
+        4000, "vertices",
+        "vertices, spread over the surface, on which maps and outputs are compared: a share of the surface is "
+        "measured on them to about 1 %")
     round_pairs: int = _field(
         1000, "pairs",
         "pairs of each round but the last: the rounds only have to find the twins, and the warp's cost grows "
         "with the cube of the pairs; the last solve takes auto_pair_count")
-    registration_samples: int = _field(
-        1000, "vertices",
-        "points of the coherent point drift registration (its cost grows with their square)")
-    registration_iterations: int = _field(
-        100, "EM iterations",
-        "most iterations of the registration's expectation-maximization; it stops earlier once the mixture's "
-        "spread and the centres stop changing")
     least_gain: float = _field(
         0.05, "share of the output's mirror asymmetry",
         "a round that makes the output less than 5 % more mirror-symmetric than the round before is the "
@@ -76,6 +92,146 @@ class AutoConfig:
     converged_change: float = _field(
         1e-9, "x bounding-box diagonal",
         "the rounds stop when the output moves less than this: numerically the same output")
+    coincident: float = _field(
+        1e-9, "x bounding-box diagonal",
+        "positions closer than this are one position (rounding); also the least precision a map is asked for")
+    widenings: int = _field(
+        4, "doublings",
+        "times theta_width may double where the automatic pairs' neighbourhoods are flat (a straight outline), "
+        "which the user did not place and cannot move")
+    spectral_vertices: int = _field(
+        6000, "vertices",
+        "the intrinsic mirror is computed on a mesh of at most about this many vertices (larger ones are "
+        "coarsened by vertex clustering): its 60 eigenfunctions vary over hundreds of vertices, and the "
+        "eigensolver's cost grows faster than the size")
+    spectral_functions: int = _field(
+        60, "eigenfunctions",
+        "Laplace-Beltrami eigenfunctions the intrinsic map is refined on (ZoomOut's last size): fine enough to "
+        "tell a leg from its neighbour, coarse enough that a bend leaves them nearly unchanged")
+    spectral_start: int = _field(
+        12, "eigenfunctions",
+        "eigenfunctions on which the mirror's functional map is solved in closed form: the lowest ones, "
+        "least changed by a bend or a compression; fewer leave it undetermined where eigenvalues are close")
+    zoomout_step: int = _field(
+        6, "eigenfunctions",
+        "eigenfunctions added per ZoomOut step from spectral_start to spectral_functions (8 steps)")
+    descriptor_scales: int = _field(
+        8, "heat kernel times",
+        "heat kernel signatures, at times spread over the spectrum, that the mirror must preserve and that "
+        "enter its orientation term; each is a different even function of the shape")
+    commutativity_weight: float = _field(
+        1.0, "x the descriptor term",
+        "weight of the functional map's commutation with the Laplacian, relative to the descriptor and "
+        "orientation terms (each scaled to the descriptors' size): equal footing")
+    pair_consistency: float = _field(
+        0.02, "x bounding-box diagonal",
+        "an intrinsic vertex pair is used to start a mirror field only if the map sends the twin back within "
+        "this of the vertex (twice an intrinsic map's typical error on a bent shape)")
+    field_centres: int = _field(
+        200, "kernel centres",
+        "Gaussian centres of a mirror field, spread over the surface: a few per kernel width in each direction "
+        "at the finest width (its registration's cost grows with their square)")
+    field_widths: tuple = _field(
+        (0.3, 0.15), "x bounding-box diagonal",
+        "kernel widths of a mirror field, coarse to fine: the first follows a bend of the whole shape without "
+        "being misled by the rough map's local errors, the second a swung limb or a bend's ends")
+    field_iterations: int = _field(
+        10, "ICP iterations per width",
+        "point-to-plane ICP converges in a few iterations where the surface is curved; 10 leave it nearly "
+        "still where it is flat (the rounds refine the map on the output)")
+    field_converged: float = _field(
+        1e-5, "x bounding-box diagonal",
+        "the registration stops when its images move less than this (RMS) in an iteration: a tenth of the "
+        "precision the pairs need")
+    field_ridge: float = _field(
+        1e-5, "x the normal matrix's mean diagonal",
+        "ridge of a mirror field's least squares: enough to keep the system invertible where centres see no "
+        "data, too little to pull a bend's large displacements back toward the plane")
+    involution_weight: float = _field(
+        0.1, "x the point-to-plane term",
+        "weight of m(m(x)) = x in the registration: without it a map may fold several regions onto one "
+        "(each lands on the surface); as strong as the data, it holds the map where it started, and ICP "
+        "creeps (a tenth: the median twin error on a bent cow half that at full weight)")
+    robust_rounds: int = _field(
+        4, "reweighting rounds",
+        "rounds of Tukey reweighting when a field is fitted to a rough map's pairs: wrong pairs lose their "
+        "weight in two or three")
+    facing: float = _field(
+        0.5, "cosine",
+        "an image counts in the registration only if the surface where it lands faces within 60 degrees of "
+        "the carried normal: on a thin sheet the other face is as near, but faces away")
+    screening_samples: int = _field(
+        800, "vertices",
+        "vertices on which each candidate map is registered before they are compared (the winner is "
+        "registered again on registration_samples)")
+    screening_centres: int = _field(
+        100, "kernel centres",
+        "centres of a candidate's field while candidates are compared: at the coarse width, a hundred "
+        "follow any bend")
+    registration_samples: int = _field(
+        1500, "vertices",
+        "vertices the winning mirror field is registered on: enough for every kernel centre to see several "
+        "of them within a width")
+    cpd_samples: int = _field(
+        1000, "vertices",
+        "points of the coherent point drift registration (its cost grows with their square)")
+    cpd_iterations: int = _field(
+        100, "EM iterations",
+        "most iterations of the registration's expectation-maximization; it stops earlier once the mixture's "
+        "spread and the centres stop changing")
+    cpd_width: float = _field(
+        3.0, "x the sample's RMS radius",
+        "kernel width of the drift's displacement field: smooth over a third of the shape, so that it moves "
+        "whole parts, not single points")
+    cpd_smoothness: float = _field(
+        2.0, "the paper's lambda",
+        "weight of the drift field's smoothness: coherent point drift's published default")
+    cpd_normal_weight: float = _field(
+        3.0, "kappa",
+        "normal term of the mixture weights, exp(kappa (cos - 1)): a point facing the other way weighs e^-6 "
+        "as much, and the field cannot simply undo the reflection")
+    cpd_outliers: float = _field(
+        0.1, "share",
+        "share of the data explained by the mixture's uniform outlier term: coherent point drift's default")
+    cpd_rank: int = _field(
+        200, "eigenvectors",
+        "leading eigenvectors of the drift's kernel matrix kept (the fast variant of the paper)")
+    cpd_tolerance: float = _field(
+        1e-5, "relative change",
+        "the drift stops when the mixture's variance changes by less than this fraction")
+    cpd_step: float = _field(
+        1e-3, "x the mixture's least deviation",
+        "and when the centres move by less than this")
+    cpd_pool: int = _field(
+        20_000, "vertices",
+        "the drift's sample is drawn by farthest-point sampling from at most this many evenly strided vertices")
+    growth_frontier: float = _field(
+        3.0, "x the median vertex spacing",
+        "unpaired vertices this close to a pair are tried in a wave of the exact-vertex growth: the ring "
+        "around the pairs and the next")
+    growth_ridge: float = _field(
+        0.05, "x the neighbourhood's spread",
+        "pull of each local affine mirror map toward its best improper rigid map: keeps a map of a nearly "
+        "flat patch determined without stiffening a curved one")
+    growth_passes: int = _field(
+        4, "passes",
+        "prune-and-grow passes at most: each removes what the one before grew wrong, and none was needed "
+        "beyond the third")
+    mirror_coverage: float = _field(
+        0.95, "share of the vertices",
+        "a growth of the tessellation's mirror must pair this share of the vertices: all but a strip along "
+        "the midline, where a symmetric model may be triangulated one way only")
+    seed_growths: int = _field(
+        12, "growths",
+        "connectivity growths tried at most per group of pieces, each from a pair the ones before do not "
+        "explain: one right seed among many wrong ones is enough")
+    least_paired_neighbours: int = _field(
+        2, "neighbours",
+        "a vertex's twin is read off the connectivity once this many of its neighbours are paired: with one, "
+        "every unpaired neighbour of that neighbour's twin would fit")
+    point_cloud_neighbours: int = _field(
+        8, "points",
+        "neighbours whose mean distance is a point cloud's local spacing")
 
     @classmethod
     def describe(cls) -> str:

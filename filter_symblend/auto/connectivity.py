@@ -16,20 +16,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sparse
 
-# Share of the vertices a growth must pair for its map to be the tessellation's mirror: all of them
-# but a strip along the midline, where a symmetric model may be triangulated one way only.
-MIRROR_COVERAGE = 0.95
-SEED_GROWTHS = 12  # growths tried at most per group of pieces, each from a pair the ones before do not explain
-LEAST_PAIRED_NEIGHBOURS = 2  # with one, every unpaired neighbour of that neighbour's twin would fit
-
-
-def vertex_adjacency(faces: np.ndarray, count: int) -> sparse.csr_matrix:
-    """Symmetric (count, count) 0/1 matrix of the mesh edges of ``faces`` (F, 3)."""
-    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    edges = np.concatenate([edges, edges[:, ::-1]])
-    adjacency = sparse.csr_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(count, count))
-    adjacency.data[:] = 1.0  # an edge shared by two triangles was summed twice
-    return adjacency
+from .config import AutoConfig
+from .graph import one_pair_per_vertex
 
 
 def _neighbours(adjacency: sparse.csr_matrix, vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -64,10 +52,10 @@ def ring_consistent(adjacency: sparse.csr_matrix, partner: np.ndarray) -> np.nda
     return paired & ~bad & (degree == degree[np.maximum(partner, 0)])
 
 
-def connectivity_twins(adjacency: sparse.csr_matrix, partner: np.ndarray, candidates: np.ndarray):
+def connectivity_twins(adjacency: sparse.csr_matrix, partner: np.ndarray, candidates: np.ndarray, least: int):
     """Twins the connectivity implies for the unpaired ``candidates`` (m,): (sources (k,), twins (k,)).
 
-    A source has LEAST_PAIRED_NEIGHBOURS paired neighbours or more; its twin is the one unpaired candidate
+    A source has ``least`` paired neighbours or more; its twin is the one unpaired candidate
     adjacent to all of their twins (the source itself on the midline), kept only where that twin's own
     twin is the source.
     """
@@ -80,7 +68,7 @@ def connectivity_twins(adjacency: sparse.csr_matrix, partner: np.ndarray, candid
     entry, near_twin = _neighbours(adjacency, twin_of_neighbour)
     reach, hits = np.unique(source[entry] * n + near_twin, return_counts=True)
     sources, twins = reach // n, reach % n
-    fits = (hits == counts[sources]) & (counts[sources] >= LEAST_PAIRED_NEIGHBOURS)
+    fits = (hits == counts[sources]) & (counts[sources] >= least)
     sources, twins = sources[fits], twins[fits]
     position = np.searchsorted(candidates, twins)
     inside = position < m
@@ -94,29 +82,28 @@ def connectivity_twins(adjacency: sparse.csr_matrix, partner: np.ndarray, candid
     return candidates[sources[mutual]], candidates[position[mutual]]
 
 
-def grow_by_connectivity(adjacency: sparse.csr_matrix, partner: np.ndarray) -> np.ndarray:
+def grow_by_connectivity(adjacency: sparse.csr_matrix, partner: np.ndarray, least: int) -> np.ndarray:
     """``partner`` (N,) extended by :func:`connectivity_twins` wave after wave until it stalls (a new array)."""
-    from .growth import _one_pair_per_vertex
-
     partner = partner.copy()
     added = np.flatnonzero(partner >= 0)
     while len(added):
-        sources, twins = connectivity_twins(adjacency, partner, np.unique(_neighbours(adjacency, added)[1]))
-        sources, twins = _one_pair_per_vertex(sources, twins)
+        sources, twins = connectivity_twins(adjacency, partner, np.unique(_neighbours(adjacency, added)[1]), least)
+        sources, twins = one_pair_per_vertex(sources, twins)
         partner[sources], partner[twins] = twins, sources
         added = np.concatenate([sources, twins])
     return partner
 
 
-def tessellation_mirror(adjacency: sparse.csr_matrix, partner: np.ndarray, usable: np.ndarray) -> np.ndarray | None:
+def tessellation_mirror(adjacency: sparse.csr_matrix, partner: np.ndarray, usable: np.ndarray,
+                        config: AutoConfig) -> np.ndarray | None:
     """The mirror automorphism of a tessellation that mirrors itself, grown from single ring-consistent
     pairs of ``partner`` (N,) with their rings, or None.
 
     A growth stays in the pieces (connected components) its seed pair joins, a piece and its mirror
     piece, or one piece its own mirror. For each such group the growth kept is the one that pairs
-    MIRROR_COVERAGE of its ``usable`` (N,) bool vertices and agrees with the most pairs of ``partner``;
-    seeds are tried until every seed is explained or SEED_GROWTHS growths have run per group. The groups'
-    maps together must pair MIRROR_COVERAGE of all the usable vertices.
+    ``config.mirror_coverage`` of its ``usable`` (N,) bool vertices and agrees with the most pairs of ``partner``;
+    seeds are tried until every seed is explained or ``config.seed_growths`` growths have run per group.
+    The groups' maps together must pair that share of all the usable vertices.
     """
     from scipy.sparse.csgraph import connected_components
 
@@ -133,13 +120,13 @@ def tessellation_mirror(adjacency: sparse.csr_matrix, partner: np.ndarray, usabl
         ring = np.concatenate([[seed], adjacency.indices[adjacency.indptr[seed]:adjacency.indptr[seed + 1]]])
         start = np.full(n, -1)
         start[ring], start[partner[ring]] = partner[ring], ring
-        grown = grow_by_connectivity(adjacency, start)
+        grown = grow_by_connectivity(adjacency, start, config.least_paired_neighbours)
         members = usable & np.isin(piece, group)
         agreement = int(np.count_nonzero((grown == partner) & (partner >= 0)))
-        if np.mean(grown[members] >= 0) >= MIRROR_COVERAGE and agreement > best.get(group, (-1, None))[0]:
+        if np.mean(grown[members] >= 0) >= config.mirror_coverage and agreement > best.get(group, (-1, None))[0]:
             best[group] = (agreement, grown)
         seeds = seeds[(grown[seeds] != partner[seeds])]
-        exhausted = [g for g, count in tries.items() if count >= SEED_GROWTHS]
+        exhausted = [g for g, count in tries.items() if count >= config.seed_growths]
         if exhausted:
             stuck = np.isin(piece[seeds], [g[0] for g in exhausted]) | np.isin(piece[seeds], [g[1] for g in exhausted])
             seeds = seeds[~stuck]
@@ -148,4 +135,4 @@ def tessellation_mirror(adjacency: sparse.csr_matrix, partner: np.ndarray, usabl
     mirrored = np.full(n, -1)
     for _, grown in best.values():
         mirrored = np.where(mirrored >= 0, mirrored, grown)
-    return mirrored if np.mean(mirrored[usable] >= 0) >= MIRROR_COVERAGE else None
+    return mirrored if np.mean(mirrored[usable] >= 0) >= config.mirror_coverage else None

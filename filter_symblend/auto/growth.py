@@ -26,19 +26,15 @@ from scipy.spatial import cKDTree
 
 from ..core.geometry import MIRROR_X, proper_rotation_fit
 from .config import AutoConfig
+from .graph import one_pair_per_vertex
 from .surface import Surface
 
-FRONTIER = 3.0  # x the median vertex spacing: unpaired vertices this close to a pair are tried in a wave
-RIDGE = 0.05  # pull of each local affine map toward its best improper rigid map, x the neighbourhood spread
-MAX_PASSES = 4  # prune-and-grow passes at most (each removes what the one before grew wrong)
-
-
 def local_maps(points: np.ndarray, partner: np.ndarray, queries: np.ndarray, paired: np.ndarray,
-               tree: cKDTree, count: int, leave_out: bool = False):
+               tree: cKDTree, count: int, ridge: float, leave_out: bool = False):
     """Predicted twins (m, 3) of the positions ``queries`` (m, 3) and the improper rigid part (m, 3, 3) of
     their local maps: affine maps fitted to the ``count`` nearest paired vertices ``paired`` (``tree`` holds
-    their positions ``points[paired]``, ``partner`` their twins), regularized toward the best improper
-    rigid map; ``leave_out``: the queries are the paired vertices' own positions, and each map is fitted
+    their positions ``points[paired]``, ``partner`` their twins), pulled toward the best improper rigid map
+    by ``ridge`` (x the neighbourhood's spread); ``leave_out``: the queries are the paired vertices' own positions, and each map is fitted
     without the query's own pair."""
     k = min(count + int(leave_out), len(paired))
     _, nearest = tree.query(queries, k=k)
@@ -49,7 +45,7 @@ def local_maps(points: np.ndarray, partner: np.ndarray, queries: np.ndarray, pai
     cross = np.einsum("nki,nkj->nij", y, x)
     spread = np.einsum("nki,nkj->nij", x, x)
     rigid = proper_rotation_fit(cross @ MIRROR_X) @ MIRROR_X  # best y ~ R J x, R proper
-    ridge = RIDGE * np.trace(spread, axis1=1, axis2=2)[:, None, None] / 3.0 + 1e-300
+    ridge = ridge * np.trace(spread, axis1=1, axis2=2)[:, None, None] / 3.0 + 1e-300
     linear = (cross + ridge * rigid) @ np.linalg.inv(spread + ridge * np.eye(3))
     return np.einsum("nij,nj->ni", linear, queries - cx) + cy, rigid
 
@@ -77,33 +73,24 @@ def grow(surface: Surface, partner: np.ndarray, eligible: np.ndarray, twins: np.
             return waves
         tree = cKDTree(points[paired])
         unpaired = np.flatnonzero(eligible & (partner < 0))
-        gap, _ = tree.query(points[unpaired], distance_upper_bound=FRONTIER * surface.spacing)
+        gap, _ = tree.query(points[unpaired], distance_upper_bound=config.growth_frontier * surface.spacing)
         sources = unpaired[np.isfinite(gap)]
         if not len(sources):
             return waves
-        predicted, rigid = local_maps(points, partner, points[sources], paired, tree, config.local_neighbours)
+        predicted, rigid = local_maps(points, partner, points[sources], paired, tree, config.local_neighbours,
+                                      config.growth_ridge)
 
         def back(vertices):
             return surface.nearest_vertices(local_maps(points, partner, points[vertices], paired, tree,
-                                                       config.local_neighbours)[0])[0]
+                                                       config.local_neighbours, config.growth_ridge)[0])[0]
 
         ok, vertex = _accepted(surface, sources, predicted, rigid, back, config)
         ok &= (partner[vertex] < 0) & twins[vertex]
-        sources, vertex = _one_pair_per_vertex(sources[ok], vertex[ok])
+        sources, vertex = one_pair_per_vertex(sources[ok], vertex[ok])
         if not len(sources):
             return waves
         partner[sources], partner[vertex] = vertex, sources
         waves += 1
-
-
-def _one_pair_per_vertex(sources: np.ndarray, twins: np.ndarray):
-    """The pairs with each vertex in one pair only (a pair found from both ends counts once)."""
-    low, high = np.minimum(sources, twins), np.maximum(sources, twins)
-    _, first = np.unique(np.column_stack([low, high]), axis=0, return_index=True)
-    sources, twins = sources[first], twins[first]
-    ends, uses = np.unique(np.concatenate([sources, twins[twins != sources]]), return_counts=True)
-    single = (uses[np.searchsorted(ends, sources)] == 1) & (uses[np.searchsorted(ends, twins)] == 1)
-    return sources[single], twins[single]
 
 
 def prune(surface: Surface, partner: np.ndarray, fixed: np.ndarray, config: AutoConfig, floor: float) -> np.ndarray:
@@ -111,13 +98,12 @@ def prune(surface: Surface, partner: np.ndarray, fixed: np.ndarray, config: Auto
     puts it (see the module doc), except ``fixed`` (N,) bool vertices. Returns the vertices dropped (N,)
     bool. ``floor`` (mesh units): the least precision asked (rounding)."""
     wrong = np.zeros(len(partner), dtype=bool)
-    
     paired = np.flatnonzero(partner >= 0)
     if len(paired) <= config.local_neighbours:
         return wrong
     tree = cKDTree(surface.points[paired])
     predicted, rigid = local_maps(surface.points, partner, surface.points[paired], paired, tree,
-                                  config.local_neighbours, leave_out=True)
+                                  config.local_neighbours, config.growth_ridge, leave_out=True)
     misfit = np.linalg.norm(predicted - surface.points[partner[paired]], axis=1)
     # The neighbouring pairs' own misfits, midline points left out: a row of vertices just off the
     # midline, each wrongly its own twin, would vouch for one another.
@@ -144,10 +130,10 @@ def grow_and_prune(space: Surface, geometry: Surface, partner: np.ndarray, eligi
     """:func:`prune` the seeds in ``partner`` on ``geometry`` (the input), :func:`grow` in ``space`` (where
     the map predicts: the input, or a symmetrized output; ``eligible`` (N,) bool vertices, with ``twins``
     (N,) bool ones), prune again, and grow again without what was dropped, until nothing changes (at most
-    MAX_PASSES)."""
+    ``config.growth_passes``)."""
     dropped = np.zeros(len(partner), dtype=bool)
     waves = 0
-    for _ in range(MAX_PASSES):
+    for _ in range(config.growth_passes):
         removed = prune(geometry, partner, fixed, config, floor)
         dropped |= removed
         grown = grow(space, partner, eligible & ~dropped, twins & ~dropped, config)

@@ -22,8 +22,8 @@ from scipy.spatial import cKDTree
 from ..core.geometry import flat_normal, normalize
 from ..core.mesh_quantities import vertex_normals
 from ..core.mirror_fill import TriangleSurface
-
-POINT_CLOUD_NEIGHBOURS = 8  # neighbours whose mean distance is a point cloud's local spacing
+from .config import DEFAULT, AutoConfig
+from .graph import vertex_adjacency
 
 
 class Surface:
@@ -34,8 +34,9 @@ class Surface:
     """
 
     def __init__(self, points: np.ndarray, faces: np.ndarray, excluded: np.ndarray | None = None,
-                 usable: np.ndarray | None = None):
+                 usable: np.ndarray | None = None, neighbours: int = DEFAULT.point_cloud_neighbours):
         self.points = np.asarray(points, dtype=float)
+        self.neighbours = neighbours
         faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
         if usable is None:
             _, first, inverse = np.unique(self.points, axis=0, return_index=True, return_inverse=True)
@@ -56,7 +57,7 @@ class Surface:
     def moved(self, points: np.ndarray) -> "Surface":
         """The same surface (welded triangles, usable vertices) at the positions ``points`` (N, 3), as a
         symmetrized output is: its triangles and local vertex spacing are taken as the input's."""
-        moved = Surface(points, self.faces, usable=self.usable)
+        moved = Surface(points, self.faces, usable=self.usable, neighbours=self.neighbours)
         moved.representative = self.representative
         moved.__dict__.update(triangles=self.triangles, local_spacing=self.local_spacing, spacing=self.spacing)
         return moved
@@ -91,7 +92,7 @@ class Surface:
         """(N,) distance from each usable vertex to its nearest usable neighbour (inf elsewhere)."""
         spacing = np.full(len(self.points), np.inf)
         if len(self.usable_index) > 1:
-            k = 2 if self.is_mesh else min(len(self.usable_index), POINT_CLOUD_NEIGHBOURS + 1)
+            k = 2 if self.is_mesh else min(len(self.usable_index), self.neighbours + 1)
             distance, _ = self.vertex_tree.query(self.points[self.usable_index], k=k)
             spacing[self.usable_index] = distance[:, 1] if self.is_mesh else distance[:, 1:].mean(axis=1)
         return spacing
@@ -116,7 +117,6 @@ class Surface:
     @functools.cached_property
     def adjacency(self):
         """(N, N) sparse 0/1 matrix of the edges of the triangles with an area."""
-        from .connectivity import vertex_adjacency
         return vertex_adjacency(self.faces[self.triangles], len(self.points))
 
     @functools.cached_property
@@ -255,8 +255,9 @@ def _boundary_edges(faces: np.ndarray, points: np.ndarray, normal: np.ndarray) -
     return directed[counts[inverse.ravel()] == 1]
 
 
-def build_surface(points: np.ndarray, faces: np.ndarray, excluded: np.ndarray | None = None) -> Surface:
+def build_surface(points: np.ndarray, faces: np.ndarray, excluded: np.ndarray | None = None,
+                  config: AutoConfig = DEFAULT) -> Surface:
     """The :class:`Surface` of a mesh, or its :class:`Outline` if the mesh is flat."""
-    surface = Surface(points, faces, excluded)
+    surface = Surface(points, faces, excluded, neighbours=config.point_cloud_neighbours)
     normal = flat_normal(points[surface.usable_index]) if surface.is_mesh and len(surface.usable_index) > 2 else None
     return surface if normal is None else Outline(points, faces, normal, excluded)

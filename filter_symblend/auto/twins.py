@@ -25,7 +25,8 @@ class Twins:
     ``landing`` its distance to the prediction; ``corners`` (m, 3) vertices and ``weights`` (m, 3)
     barycentric weights of the twin point (the same point on any embedding of the mesh);
     ``vertex`` (m,) the nearest vertex to the prediction, ``vertex_distance``, ``ratio`` (nearest /
-    second-nearest), ``mutual`` whether the map sends that vertex back to the source; ``sound`` whether
+    second-nearest), ``spacing`` the local vertex spacing there, ``mutual`` whether the map sends that vertex
+    back to the source; ``sound`` whether
     the map is consistent there; ``side`` +1 for a source on the left (along the map's normal), -1 right."""
 
     sources: np.ndarray
@@ -36,6 +37,7 @@ class Twins:
     vertex: np.ndarray
     vertex_distance: np.ndarray
     ratio: np.ndarray
+    spacing: np.ndarray
     mutual: np.ndarray
     sound: np.ndarray
     side: np.ndarray
@@ -44,11 +46,14 @@ class Twins:
         """(m,) bool: sources with a sound twin landing within ``tolerance`` (mesh units)."""
         return self.sound & (self.landing <= tolerance)
 
-    def exact_vertex(self, config: AutoConfig, tolerance: float) -> np.ndarray:
+    def exact_vertex(self, config: AutoConfig, tolerance: float, strict: bool = True) -> np.ndarray:
         """(m,) bool: sources whose twin is a vertex: the nearest vertex to the prediction, within
-        ``tolerance`` of it (mesh units: the map's precision), unambiguous and mutual (a source can be its
-        own twin, on the midline)."""
-        return self.sound & self.mutual & (self.ratio <= config.ratio) & (self.vertex_distance <= tolerance)
+        ``tolerance`` of it (mesh units: the map's precision) and, if ``strict``, within ``vertex_precision``
+        of the local spacing, unambiguous and mutual (a source can be its own twin, on the midline). Not
+        strict: seeds for a growth that proves them (:mod:`.connectivity`)."""
+        bound = np.minimum(tolerance, config.vertex_precision * self.spacing) if strict else tolerance
+        near = self.vertex_distance <= bound
+        return self.sound & self.mutual & (self.ratio <= config.ratio) & near
 
 
 def find_twins(mirror: MirrorMap, sources: np.ndarray, tolerance: float) -> Twins:
@@ -63,9 +68,9 @@ def find_twins(mirror: MirrorMap, sources: np.ndarray, tolerance: float) -> Twin
     round_trip = np.linalg.norm(surface.points[back] - positions, axis=1)
     sound = np.isfinite(predicted).all(axis=1) & (round_trip <= np.maximum(surface.local_spacing[sources], tolerance))
     if surface.is_mesh:
-        sound &= np.einsum("ni,ni->n", mirror.mirror_normals(surface.normals[sources]), twin_normal) > 0
+        sound &= np.einsum("ni,ni->n", mirror.mirror_normals(surface.normals[sources], positions), twin_normal) > 0
     vertex, vertex_distance, ratio = surface.nearest_vertices(predicted)
     returning, _, _ = surface.nearest_vertices(mirror.predict(surface.points[vertex]))
     side = np.where((positions - point) @ mirror.normal >= 0, 1, -1).astype(np.int8)
-    return Twins(sources, point, landing, corners, weights, vertex, vertex_distance, ratio, returning == sources,
-                 sound, side)
+    return Twins(sources, point, landing, corners, weights, vertex, vertex_distance, ratio, surface.local_spacing[vertex],
+                 returning == sources, sound, side)

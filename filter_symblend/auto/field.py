@@ -1,0 +1,153 @@
+"""A smooth mirror map of a surface onto itself, registered by symmetric non-rigid ICP.
+
+The map is a reflection plus a smooth displacement, m(x) = reflect(x) + sum_c k(x, c) w_c, with a
+Gaussian kernel k of width ``width`` around ``centres`` spread over the surface: it follows a bend, a
+compression or a swung limb as far as the kernel's width allows. It is first fitted to the pairs a
+rough map gives (a plane, the whitened plane, the intrinsic mirror), robustly (Tukey's biweight: the
+rough map's wrong pairs do not pull it), then registered onto the surface: each iteration moves the
+map's images toward the tangent planes of the surface where they land (point-to-plane ICP, which
+converges in a few steps where point-to-point creeps), while the map applied twice returns to the
+start (m(m(x)) = x, linearized at the current images), images landing far, or on a surface facing
+the wrong way, being left out. A ridge keeps the least-squares system well posed.
+
+Written here: scipy has no non-rigid registration. The coherent point drift this replaces (earlier
+in this layer) needed a start near the answer and a kernel too stiff for a strong bend.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.distance import cdist
+
+from ..core.geometry import normalize, reflection_across_plane
+from ..core.landmark_asymmetry import fit_mirror_plane
+from ..core.mesh_quantities import farthest_point_order
+from .config import AutoConfig
+
+
+class MirrorField:
+    """m(x) = reflect(x) + K(x) @ weights across the plane ``normal . x = offset`` (mesh units), the
+    kernel K Gaussian of ``width`` (mesh units) around ``centres`` (c, 3)."""
+
+    def __init__(self, normal: np.ndarray, offset: float, centres: np.ndarray, width: float):
+        self.normal, self.offset = normalize(np.asarray(normal, dtype=float)), float(offset)
+        self.centres, self.width = centres, float(width)
+        self.weights = np.zeros((len(centres), 3))
+        self.reflection = np.eye(3) - 2.0 * np.outer(self.normal, self.normal)
+
+    def kernel(self, x: np.ndarray) -> np.ndarray:
+        """(m, c) kernel values at the positions ``x`` (m, 3)."""
+        return np.exp(-cdist(x, self.centres, "sqeuclidean") / (2.0 * self.width**2))
+
+    def reflected(self, x: np.ndarray) -> np.ndarray:
+        return reflection_across_plane(x, self.normal, self.offset)
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        """Images (m, 3) of the positions ``x`` (m, 3)."""
+        return self.reflected(x) + self.kernel(x) @ self.weights
+
+    def jacobians(self, x: np.ndarray) -> np.ndarray:
+        """(m, 3, 3) derivative of the map at ``x`` (m, 3): reflection - sum_c k_c w_c (x - c)^T / width^2,
+        from four (m, c) x (c, 3) products."""
+        k = self.kernel(x)
+        pulled = k @ self.weights  # (m, 3): sum_c k_c w_c
+        moments = np.stack([k @ (self.weights * self.centres[:, [j]]) for j in range(3)], axis=2)  # (m, 3, 3)
+        return self.reflection[None] - (pulled[:, :, None] * x[:, None, :] - moments) / self.width**2
+
+    def mirror_normals(self, normals: np.ndarray, positions: np.ndarray) -> np.ndarray:
+        """Unit normals (m, 3) at the images of ``positions`` (m, 3) of the surface normals ``normals`` there
+        (carried by the inverse transpose of the derivative)."""
+        jacobians = self.jacobians(positions)
+        return normalize(np.linalg.solve(np.transpose(jacobians, (0, 2, 1)), normals[:, :, None])[:, :, 0])
+
+
+def _ridge_solve(matrix: np.ndarray, right: np.ndarray, ridge: float) -> np.ndarray:
+    size = len(matrix)
+    return np.linalg.solve(matrix + ridge * np.trace(matrix) / size * np.eye(size), right)
+
+
+def _point_normal_matrix(kernel: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """sum_i w_i (K_i K_i^T) kron I_3 for point-to-point rows; unknowns ordered (centre, axis)."""
+    gram = (kernel * weights[:, None]).T @ kernel
+    return np.kron(gram, np.eye(3))
+
+
+def _plane_normal_matrix(kernel: np.ndarray, normals: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """sum_i w_i (K_i K_i^T) kron (n_i n_i^T) for point-to-plane rows, as one product of the (m, 3c)
+    design matrix with itself."""
+    design = (kernel[:, :, None] * normals[:, None, :]).reshape(len(kernel), -1)
+    return (design * weights[:, None]).T @ design
+
+
+def fit_to_pairs(field: MirrorField, x: np.ndarray, y: np.ndarray, weights: np.ndarray, ridge: float) -> None:
+    """Set ``field``'s weights so that it maps ``x`` (m, 3) to ``y`` (m, 3), each pair weighing ``weights``
+    (m,)."""
+    kernel = field.kernel(x)
+    residual = y - field.reflected(x)
+    right = ((kernel * weights[:, None]).T @ residual).reshape(-1)
+    field.weights = _ridge_solve(_point_normal_matrix(kernel, weights), right, ridge).reshape(-1, 3)
+
+
+def robust_fit(x: np.ndarray, y: np.ndarray, centres: np.ndarray, width: float, config: AutoConfig) -> MirrorField:
+    """The field through the pairs ``x`` -> ``y`` (m, 3), ``width`` and ``centres`` (c, 3) given, fitted by
+    iteratively reweighted least squares with Tukey's biweight at ``robust_sigmas`` robust deviations:
+    pairs far off the others' smooth map weigh nothing. Its plane is the pairs' mirror plane."""
+    plane = fit_mirror_plane(x, y)
+    field = MirrorField(plane.normal, plane.offset, centres, width)
+    weights = np.ones(len(x))
+    for _ in range(config.robust_rounds):
+        fit_to_pairs(field, x, y, weights, config.field_ridge)
+        misfit = np.linalg.norm(field(x) - y, axis=1)
+        scaled = misfit / (config.robust_sigmas * 1.4826 * np.median(misfit) + 1e-300)
+        weights = (1.0 - np.minimum(scaled, 1.0) ** 2) ** 2  # Tukey: zero beyond the bound
+    return field
+
+
+def refitted(field: MirrorField, positions: np.ndarray, centres: np.ndarray, width: float,
+             config: AutoConfig) -> MirrorField:
+    """A field of another ``width`` and ``centres`` that reproduces ``field`` at ``positions`` (m, 3)."""
+    finer = MirrorField(field.normal, field.offset, centres, width)
+    fit_to_pairs(finer, positions, field(positions), np.ones(len(positions)), config.field_ridge)
+    return finer
+
+
+def register(field: MirrorField, surface, sample: np.ndarray, iterations: int, config: AutoConfig) -> MirrorField:
+    """``field`` refined (in place) so that it maps the ``sample`` (m,) vertices of ``surface`` (a
+    :class:`.surface.Surface`) onto the surface, by symmetric point-to-plane ICP (see the module doc)."""
+    x = surface.points[sample]
+    normals = surface.normals[sample]
+    kernel = field.kernel(x)
+    reflected = field.reflected(x)
+    floor = config.coincident * surface.diagonal
+    previous = None
+    for _ in range(iterations):
+        images = field(x)
+        if previous is not None and np.sqrt(np.mean(np.sum((images - previous) ** 2, axis=1))) < \
+                config.field_converged * surface.diagonal:
+            break
+        previous = images
+        landed, distance, landed_normals, _, _ = surface.nearest_points(images)
+        facing = np.einsum("ij,ij->i", field.mirror_normals(normals, x), landed_normals)
+        facing = facing if surface.is_mesh else np.abs(facing)  # a point cloud's normals are unoriented
+        near = facing > config.facing
+        if not near.any():
+            break
+        bound = max(config.robust_sigmas * 1.4826 * float(np.median(distance[near])), floor)
+        weights = (near & (distance <= bound)).astype(float)
+        # A landed image z with normal n: n . (reflect(x) + K(x) W) = n . z
+        target = np.einsum("ij,ij->i", landed_normals, landed - reflected)
+        design = (kernel[:, :, None] * landed_normals[:, None, :]).reshape(len(x), -1)
+        matrix = _plane_normal_matrix(kernel, landed_normals, weights)
+        right = design.T @ (weights * target)
+        # m(m(x)) = x at the current images: reflect(y) + K(y) W = x
+        image_kernel = field.kernel(images)
+        matrix += config.involution_weight * _point_normal_matrix(image_kernel, weights)
+        right += config.involution_weight * ((image_kernel * weights[:, None]).T @ (x - field.reflected(images))).reshape(-1)
+        field.weights = _ridge_solve(matrix, right, config.field_ridge).reshape(-1, 3)
+    return field
+
+
+def field_centres(surface, sample: np.ndarray, count: int) -> np.ndarray:
+    """(count, 3) kernel centres: ``count`` of the ``sample`` vertices by farthest-point sampling."""
+    chosen = farthest_point_order(surface.points[sample], min(count, len(sample)))
+    return surface.points[sample[chosen]]

@@ -1,0 +1,201 @@
+"""The first mirror map of a shape with no landmarks: candidate maps, each registered, one score.
+
+Every map is judged by one score over the whole surface: the share of it that the map mirrors (the
+twin lands on the surface within ``landing_tolerance``, the map comes back, and the two face the
+mirrored way). A plane that mirrors a body of revolution but not the parts on its sides loses to the
+plane through the parts; a plane that mirrors the middle of a bent shape loses to a map that follows
+the bend. The candidates, cheapest first:
+
+1. The reflections across the best mirror planes of the surface, and across the plane of the whitened
+   shape (a shape compressed or sheared as a whole). On a mesh whose tessellation mirrors itself, the
+   tessellation's own mirror grown from their vertex twins (:mod:`.connectivity`) is exact whatever
+   the bend, and ends the search; so does a plain map that mirrors ``plane_suffices`` of the surface
+   (a rigid pose, a scan: a non-rigid map could mirror little more, and would slide on a round shape).
+2. Otherwise each rough guess starts a smooth mirror field, registered onto the surface
+   (:mod:`.field`): the plain maps; the coherent point drift of the best plane (:mod:`.registration`:
+   a strong bend with a compression, which ICP from a plane does not reach); the shape's intrinsic
+   mirror (:mod:`.spectral`: a bend, a swung limb, which no plane follows); the drift of the second plane. They are compared
+   registered on a small sample with a coarse field; the best is registered again on more vertices
+   with finer fields.
+
+A shape that no map mirrors over ``min_coverage`` of its surface is refused; so is one that only a
+registered field mirrors that much, but not within ``field_precision`` of the tolerance (a field fitted
+onto any surface lands much of it somewhere: 80 % of a bunny).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..checks.surface_asymmetry import surface_mirror_planes
+from ..errors import SymmetryNotFoundError
+from .config import AutoConfig
+from .connectivity import tessellation_mirror
+from .field import MirrorField, field_centres, refitted, register, robust_fit
+from .graph import one_pair_per_vertex
+from .maps import MirrorMap, affine_map, field_map, pairs_map, plane_map
+from .pairs import robust_tolerance
+from .registration import coherent_point_drift, registration_sample
+from .spectral import intrinsic_mirror, working_mesh
+from .surface import Outline, Surface
+from .twins import find_twins
+
+
+def _strided(surface: Surface, count: int) -> np.ndarray:
+    """At most ``count`` usable vertices, evenly strided (sorted)."""
+    usable = surface.usable_index
+    return usable if len(usable) <= count else usable[np.linspace(0, len(usable) - 1, count).astype(np.int64)]
+
+
+def coverage(mirror: MirrorMap, sources: np.ndarray, config: AutoConfig, share: float = 1.0) -> float:
+    """Share of the ``sources`` (m,) vertices that ``mirror`` mirrors (see the module doc), within ``share`` x
+    the landing tolerance."""
+    tolerance = share * config.landing_tolerance * mirror.surface.diagonal
+    return float(np.mean(find_twins(mirror, sources, tolerance).covered(tolerance)))
+
+
+def tessellation_map(surface: Surface, maps: list[MirrorMap], sources: np.ndarray, config: AutoConfig) -> MirrorMap | None:
+    """The mirror map of the tessellation (:func:`.connectivity.tessellation_mirror`), grown from the vertex
+    twins one of the geometric ``maps`` gives at the ``sources`` (tried in turn), or None: a point cloud, or a
+    tessellation that does not mirror itself (a growth covering it cannot arise by chance, so any twin that
+    passes the ratio test may seed it)."""
+    if not surface.is_mesh:
+        return None
+    tolerance = config.landing_tolerance * surface.diagonal
+    for mirror in maps:
+        twins = find_twins(mirror, sources, tolerance)
+        covered = twins.covered(tolerance)
+        precision = robust_tolerance(twins.landing[covered], config, config.coincident * surface.diagonal)
+        exact = twins.exact_vertex(config, precision, strict=False) & covered
+        partner = np.full(len(surface.points), -1)
+        seeds, twin = one_pair_per_vertex(sources[exact], twins.vertex[exact])
+        partner[seeds], partner[twin] = twin, seeds
+        mirrored = tessellation_mirror(surface.adjacency, partner, surface.usable, config)
+        if mirrored is not None:
+            return pairs_map(surface, mirrored, mirror.normal, config, "tessellation mirror")
+    return None
+
+
+def _intrinsic_pairs(surface: Surface, sample: np.ndarray, config: AutoConfig):
+    """(vertices (m,), twin positions (m, 3)) of the ``sample`` under the intrinsic mirror, only where
+    the mirror sends the twin back near the vertex; None for a point cloud or a mesh without a spectrum."""
+    if not surface.is_mesh:
+        return None
+    mesh = working_mesh(surface.points, surface.faces[surface.triangles], surface.usable, config)
+    twin = None if mesh is None else intrinsic_mirror(mesh, config)
+    if twin is None:
+        return None
+    local = mesh.vertex_of[sample]
+    sample, local = sample[local >= 0], local[local >= 0]
+    back = np.linalg.norm(mesh.points[twin[twin[local]]] - mesh.points[local], axis=1)
+    sound = back <= config.pair_consistency * surface.diagonal
+    return sample[sound], mesh.points[twin[local[sound]]]
+
+
+def _drift_predictions(start: MirrorMap, x: np.ndarray, config: AutoConfig) -> np.ndarray:
+    """Twin positions (m, 3) of ``x`` (m, 3) under ``start`` corrected by coherent point drift."""
+    surface = start.surface
+    sample = registration_sample(surface, config.cpd_samples, config.cpd_pool)
+    points, normals = surface.points[sample], surface.normals[sample]
+    drift = coherent_point_drift(points, start.predict(points), normals, start.mirror_normals(normals, points),
+                                 0.3 * surface.spacing, config)
+    return drift(start.predict(x))
+
+
+def _starts(surface: Surface, sample: np.ndarray, ranked: list[MirrorMap], config: AutoConfig):
+    """(name, vertices, twin positions) of each rough guess, cheapest first (see the module doc)."""
+    x = surface.points[sample]
+    for mirror in ranked:
+        yield mirror.name, sample, mirror.predict(x)
+    yield f"drift from the {ranked[0].name}", sample, _drift_predictions(ranked[0], x, config)
+    intrinsic = _intrinsic_pairs(surface, sample, config)
+    if intrinsic is not None and len(intrinsic[0]) >= config.screening_centres:
+        yield "intrinsic mirror", *intrinsic
+    for mirror in ranked[1:2]:
+        yield f"drift from the {mirror.name}", sample, _drift_predictions(mirror, x, config)
+
+
+def registered_field(surface: Surface, sample: np.ndarray, field: MirrorField, config: AutoConfig) -> MirrorField:
+    """``field`` carried through ``config.field_widths`` (coarse to fine) on ``field_centres`` centres,
+    registered at each on the ``sample`` vertices."""
+    centres = field_centres(surface, sample, config.field_centres)
+    for width in config.field_widths:
+        field = refitted(field, surface.points[sample], centres, width * surface.diagonal, config)
+        register(field, surface, sample, config.field_iterations, config)
+    return field
+
+
+def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress=None):
+    """(the map that mirrors the most of the surface, {name: share mirrored} of every candidate tried, the
+    surface's best mirror plane (normal, offset)); SymmetryNotFoundError when none mirrors
+    ``min_coverage`` of it. ``scored`` (m,): the vertices the shares are measured on."""
+    planes = surface_mirror_planes(surface.points[surface.usable_index])
+    rigid = [plane_map(surface, *plane, name="mirror plane" if rank == 1 else f"mirror plane {rank}")
+             for rank, plane in enumerate(planes[:3], 1)]
+    if not isinstance(surface, Outline):  # a flat shape's mirrors are lines of its plane: the planes find them
+        rigid.append(affine_map(surface))
+    shares = {mirror.name: coverage(mirror, scored, config) for mirror in rigid}
+    ranked = sorted(rigid, key=lambda mirror: -shares[mirror.name])
+    mirrored = tessellation_map(surface, ranked[:2], scored, config)
+    if mirrored is not None:  # the tessellation mirrors itself: its own mirror, exact whatever the bend
+        shares[mirrored.name] = coverage(mirrored, scored, config)
+        return mirrored, shares, planes[0]
+    if isinstance(surface, Outline) or shares[ranked[0].name] >= config.plane_suffices:
+        return _refuse_or(ranked[0], shares, config), shares, planes[0]
+    screening = _strided(surface, config.screening_samples)
+    coarse = config.field_widths[0] * surface.diagonal
+    centres = field_centres(surface, screening, config.screening_centres)
+    candidates = []
+    for index, (name, vertices, twins) in enumerate(_starts(surface, screening, ranked, config)):
+        if progress is not None:
+            progress(min(60.0, 8.0 * index), f"finding a mirror map: {name}")
+        field = robust_fit(surface.points[vertices], twins, centres, coarse, config)
+        register(field, surface, screening, config.field_iterations, config)
+        mirror = field_map(surface, field, f"registration from the {name}")
+        shares[mirror.name] = coverage(mirror, scored, config)
+        candidates.append((mirror, field))
+        if shares[mirror.name] >= config.field_suffices:
+            break
+    coarse_best, field = max(candidates, key=lambda entry: shares[entry[0].name])
+    if progress is not None:
+        progress(60.0, f"{coarse_best.name}, on {config.registration_samples} vertices")
+    sample = _strided(surface, config.registration_samples)
+    best = field_map(surface, registered_field(surface, sample, field, config), coarse_best.name)
+    share = coverage(best, scored, config)
+    if share >= shares[best.name]:  # finer fields mirror at least as much, as a rule; if not, the coarse one stays
+        shares[best.name] = share
+    else:
+        best = coarse_best
+    mirrored = tessellation_map(surface, [best], scored, config)
+    if mirrored is not None:
+        shares[mirrored.name] = coverage(mirrored, scored, config)
+        return mirrored, shares, planes[0]
+    rigid_share = max(shares[mirror.name] for mirror in rigid)
+    # A plain map that mirrors min_coverage shows a symmetry up to the scan's noise; else the field must
+    # prove it within its own precision.
+    return _refuse_or(best, shares, config, None if rigid_share >= config.min_coverage else scored), shares, planes[0]
+
+
+def _refuse_or(best: MirrorMap, shares: dict, config: AutoConfig, scored: np.ndarray | None = None) -> MirrorMap:
+    """``best``, or SymmetryNotFoundError if it mirrors less than ``min_coverage`` of the surface: within the
+    landing tolerance, and for a registered field (which lands where it lands by fitting: give the ``scored``
+    vertices) within ``field_precision`` of it too."""
+    share = shares[best.name]
+    listed = ", ".join(f"{name} {value:.0%}" for name, value in shares.items())
+    found = f"mirrors {share:.0%} of the surface within {100 * config.landing_tolerance:g}% of its size"
+    needs = f"needs {config.min_coverage:.0%}"
+    if scored is not None and share >= config.min_coverage:
+        tolerance = config.field_precision * config.landing_tolerance
+        precise = coverage(best, scored, config, config.field_precision)
+        shares[f"{best.name}, within {100 * tolerance:g}%"] = precise
+        if precise < config.precise_coverage:
+            share = precise
+            found += (f" but {precise:.0%} within {100 * tolerance:g}%, where a field fitted onto the surface "
+                      "lands on a symmetric shape")
+            needs = f"needs {config.precise_coverage:.0%} there"
+    if share < config.min_coverage or needs.endswith("there"):
+        raise SymmetryNotFoundError(
+            f"No mirror symmetry found: the best mirror map ({best.name}) {found} ({listed}); a mirror-symmetric "
+            f"shape, even bent or compressed, {needs}. Place landmark pairs and use "
+            "pairs='landmarks' (or 'landmarks+auto').")
+    return best

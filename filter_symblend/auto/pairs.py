@@ -1,0 +1,216 @@
+"""The pairs one round finds under a mirror map, and how they join the paper's solve.
+
+Each vertex of a spread sample gets its twin under the map (:mod:`.twins`); twins the map is not
+consistent about (it does not come back, the two do not face the mirrored way) or that land off the
+surface are dropped, and the share kept of those that landed is the round's ``consistency``. Then:
+
+- On a mesh whose vertices mirror each other (a mirrored model, a symmetric template warped onto a
+  specimen), a third or more of the twins are exact vertices at once (unambiguous, mutual, as precise
+  as the map): those seed a growth along the surface by local mirror maps, pairs their neighbours
+  contradict are pruned (:mod:`.growth`), and the tessellation's own mirror (:mod:`.connectivity`)
+  pairs what the geometry cannot. The pairs are vertex pairs, exact.
+- Otherwise (a scan, a remeshed surface: the two sides sampled independently) a vertex's twin is a
+  point of the surface, inside a triangle: the pair joins the solve as the vertex and that point (a
+  barycentric combination of the triangle's corners, the same material point on the input as on any
+  embedding of the mesh). Snapping it to the nearest vertex would leave every pair up to half an edge
+  off along the surface, an error the solve then makes symmetric.
+
+Vertices whose twin is themselves (within half the local vertex spacing) are midline points. The pairs
+go through :func:`~filter_symblend.core.symmetrize.check_landmarks`, the same checks as a user's.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..core.geometry import voxel_grid
+from ..core.symmetrize import CheckedLandmarks, check_landmarks
+from ..errors import GeometryError
+from .config import AutoConfig
+from .connectivity import ring_consistent, tessellation_mirror
+from .graph import one_pair_per_vertex
+from .growth import grow_and_prune
+from .maps import MirrorMap
+from .surface import Surface
+from .twins import find_twins
+
+
+@dataclasses.dataclass(frozen=True)
+class AutomaticPairs:
+    """Pairs found in one round, each side a point of the surface: barycentric ``left_weights`` (n, 3) on the
+    vertices ``left_corners`` (n, 3), likewise ``right_weights`` and ``right_corners`` (weight 1 on one corner:
+    that vertex); midline vertices ``midline`` (m,); ``info``, what the round reports."""
+
+    left_corners: np.ndarray
+    left_weights: np.ndarray
+    right_corners: np.ndarray
+    right_weights: np.ndarray
+    midline: np.ndarray
+    info: dict
+
+
+def spread(points: np.ndarray, vertices: np.ndarray, count: int) -> np.ndarray:
+    """At most about ``count`` of ``vertices`` spread evenly (one per cell of a voxel grid), in order."""
+    if len(vertices) <= count:
+        return vertices
+    keys = voxel_grid(points[vertices], count, steps=16)
+    _, first = np.unique(keys, return_index=True)
+    return vertices[np.sort(first)]
+
+
+def robust_tolerance(values: np.ndarray, config: AutoConfig, floor: float) -> float:
+    """``robust_sigmas`` robust standard deviations of ``values`` (taken as |N(0, sigma)|), at least ``floor``."""
+    return max(config.robust_sigmas * 1.4826 * float(np.median(values)), floor) if len(values) else floor
+
+
+def _vertex_twins(vertices: np.ndarray):
+    """Corners (n, 3) and weights (n, 3) of twins that are the ``vertices`` (n,) themselves."""
+    weights = np.zeros((len(vertices), 3))
+    weights[:, 0] = 1.0
+    return np.repeat(vertices[:, None], 3, axis=1), weights
+
+
+def find_pairs(mirror: MirrorMap, geometry: Surface, sources: np.ndarray, fixed: CheckedLandmarks | None,
+               forbidden: np.ndarray, count: int, config: AutoConfig, exact: bool | None = None) -> AutomaticPairs:
+    """About ``count`` pairs under ``mirror`` for ``sources`` (sorted vertex indices; see the module doc),
+    checked on ``geometry`` (the input); none on or toward a ``forbidden`` (N,) vertex (a landmark, an
+    excluded part). ``fixed``: the user's landmarks, anchors of the growth. ``exact``: whether the twins are
+    to be exact vertices; None: decided here, by the share of the twins that are (on a symmetrized output the
+    pairs it was made from always are, so the later rounds pass the first round's answer)."""
+    surface = mirror.surface
+    tolerance = config.landing_tolerance * geometry.diagonal
+    twins = find_twins(mirror, sources, tolerance)
+    landed = twins.landing <= tolerance
+    covered = twins.covered(tolerance) & ~forbidden[twins.corners].any(axis=1)
+    if not covered.any():
+        raise GeometryError("Automatic pairing found no vertex whose mirror image lies on the surface.")
+    floor = config.coincident * surface.diagonal
+    precision = robust_tolerance(twins.landing[covered], config, floor)
+    seeds = twins.exact_vertex(config, precision) & covered & ~forbidden[twins.vertex]
+    beyond_chance = seeds & (surface.chance_ratio(twins.ratio) <= config.ratio)
+    info = {"map": mirror.name, "twins": float(np.mean(covered)),
+            "consistency": float(np.count_nonzero(covered) / max(np.count_nonzero(landed), 1)),
+            "vertex_twins": float(np.count_nonzero(beyond_chance) / np.count_nonzero(covered))}
+    if exact is not False and (exact or np.count_nonzero(seeds) > config.local_neighbours):
+        # Vertex twins, perhaps: the growth from them proves it by pairing most of the vertices, which it
+        # cannot do on two sides sampled independently (their vertices miss each other's local maps).
+        found = _exact_pairs(mirror, geometry, sources, twins, seeds, fixed, forbidden, count, config, floor, info)
+        if exact or found.info["vertex_share"] >= config.vertex_share:
+            return found
+    usable = covered & ~forbidden[sources]
+    candidates = sources[usable]
+    chosen = spread(surface.points, candidates, count)
+    pairs = _point_pairs(surface, sources, twins, np.searchsorted(sources, chosen))
+    return AutomaticPairs(*pairs, {**info, "twins_are": "points of the surface", "candidates": len(candidates)})
+
+
+def _point_pairs(surface: Surface, sources: np.ndarray, twins, rows: np.ndarray):
+    """(left corners, left weights, right corners, right weights, midline) of the ``rows`` of ``sources``
+    (m,) with their twin points: the left one first; the sources that are their own twin (within half the
+    local spacing) on the midline."""
+    itself = np.linalg.norm(twins.point[rows] - surface.points[sources[rows]], axis=1) \
+        <= 0.5 * surface.local_spacing[sources[rows]]
+    midline, rows = sources[rows[itself]], rows[~itself]
+    own_corners, own_weights = _vertex_twins(sources[rows])
+    left = twins.side[rows] > 0
+    pick = lambda a, b: np.where(left[:, None], a, b)  # noqa: E731
+    return (pick(own_corners, twins.corners[rows]), pick(own_weights, twins.weights[rows]),
+            pick(twins.corners[rows], own_corners), pick(twins.weights[rows], own_weights), midline)
+
+
+def _exact_pairs(mirror, geometry, sources, twins, exact_twins, fixed, forbidden, count, config, floor, info):
+    """Exact vertex pairs grown from the exact twins (see the module doc); ``info`` gains what the growth
+    did and ``vertex_share``, the share of the usable vertices it paired. Where the growth does not reach
+    (the tip of a horn) nothing is paired: the map's twin points there would carry its tangential error
+    into the solve (on a bent cow, 3x the symmetry error of leaving them to the warp)."""
+    info = dict(info)
+    surface = mirror.surface
+    n = len(surface.points)
+    index = np.arange(n)
+    partner = np.full(n, -1)
+    if fixed is not None:
+        partner[fixed.left], partner[fixed.right], partner[fixed.midline] = fixed.right, fixed.left, fixed.midline
+    seeds, twin = one_pair_per_vertex(sources[exact_twins], twins.vertex[exact_twins])
+    partner[seeds], partner[twin] = twin, seeds
+    in_sample = np.zeros(n, dtype=bool)
+    in_sample[sources] = True
+    info.update(grow_and_prune(surface, geometry, partner, in_sample & ~forbidden, surface.usable & ~forbidden,
+                               forbidden, config, floor))
+    if surface.is_mesh:
+        mirrored = tessellation_mirror(surface.adjacency, partner, surface.usable & ~forbidden, config)
+        info["tessellation_mirror"] = mirrored is not None
+        if mirrored is not None:
+            # Where the tessellation stops mirroring (a midline strip triangulated one way), its pairs can be
+            # wrong: those are left to the geometric growth from the pairs whose rings map whole, which are
+            # exact whatever the geometry around them (a joint), and so are not pruned.
+            whole = ring_consistent(surface.adjacency, mirrored) & ~forbidden
+            partner[:] = np.where(whole, mirrored, -1)
+            if fixed is not None:
+                partner[fixed.left], partner[fixed.right] = fixed.right, fixed.left
+                partner[fixed.midline] = fixed.midline
+            info.update(grow_and_prune(surface, geometry, partner, in_sample & ~forbidden,
+                                       surface.usable & ~forbidden, forbidden | whole, config, floor))
+    automatic = (partner >= 0) & ~forbidden
+    info["vertex_share"] = float(np.count_nonzero(automatic & surface.usable) /
+                                 max(np.count_nonzero(surface.usable & ~forbidden), 1))
+    gap = surface.points - surface.points[np.maximum(partner, 0)]
+    left = np.flatnonzero(automatic & (partner != index) & (gap @ mirror.normal > 0))
+    midline = np.flatnonzero(automatic & (partner == index))
+    candidates = np.concatenate([left, midline])
+    chosen = spread(surface.points, candidates, count)
+    on_plane = partner[chosen] == chosen
+    return AutomaticPairs(*_vertex_twins(chosen[~on_plane]), *_vertex_twins(partner[chosen[~on_plane]]),
+                          chosen[on_plane], {**info, "twins_are": "exact vertices", "candidates": len(candidates)})
+
+
+def _on_points(points: np.ndarray, corners: np.ndarray, weights: np.ndarray, first: int):
+    """Indices (n,) of the points the sides (``corners``, ``weights`` (n, 3)) stand at: the vertex where the
+    weight is all on one, else ``first`` + k for the k-th point inside a triangle; and those points (k, 3)."""
+    on_vertex = weights.max(axis=1) >= 1.0 - 1e-12
+    inside = np.flatnonzero(~on_vertex)
+    index = corners[np.arange(len(corners)), np.argmax(weights, axis=1)]
+    index[inside] = first + np.arange(len(inside))
+    return index, np.einsum("kj,kji->ki", weights[inside], points[corners[inside]])
+
+
+def as_landmarks(points: np.ndarray, pairs: AutomaticPairs, user: CheckedLandmarks | None,
+                 priority: float, coincident: float) -> tuple[np.ndarray, CheckedLandmarks]:
+    """The points the solve runs on ((N + k, 3): the vertices, then the k pair sides inside triangles) and the
+    user's and the automatic pairs as checked landmarks on them (automatic pairs touching a landmark's vertex,
+    or on a position another landmark holds, are left out); the user's weigh ``priority`` times more."""
+    keep = np.ones(len(pairs.left_corners), dtype=bool)
+    midline = pairs.midline
+    if user is not None:
+        taken = np.concatenate([user.left, user.right, user.midline])
+        keep = ~np.isin(pairs.left_corners, taken).any(axis=1) & ~np.isin(pairs.right_corners, taken).any(axis=1)
+        midline = midline[~np.isin(midline, taken)]
+    left, inside_left = _on_points(points, pairs.left_corners[keep], pairs.left_weights[keep], len(points))
+    right, inside_right = _on_points(points, pairs.right_corners[keep], pairs.right_weights[keep],
+                                     len(points) + len(inside_left))
+    solved = np.vstack([points, inside_left, inside_right])
+    left, right, midline = _distinct(solved, left, right, midline, user, coincident)
+    first = 1 if user is None or not len(user.ids) else int(np.max(user.ids)) + 1
+    ids = np.arange(first, first + len(left))
+    ones = np.ones(len(left))
+    if user is None:
+        return solved, check_landmarks(solved, left, right, ids, midline, ones, ones)
+    both = check_landmarks(solved, np.concatenate([user.left, left]), np.concatenate([user.right, right]),
+                           np.concatenate([user.ids, ids]), np.concatenate([user.midline, midline]))
+    return solved, dataclasses.replace(both, left_weights=np.concatenate([priority * user.left_weights, ones]),
+                                       right_weights=np.concatenate([priority * user.right_weights, ones]))
+
+
+def _distinct(points, left, right, midline, user, coincident):
+    """The pairs and midline points whose positions differ from every other landmark's (``coincident`` x
+    the landmarks' diagonal apart)."""
+    fixed = np.zeros(0, dtype=np.int64) if user is None else np.concatenate([user.left, user.right, user.midline])
+    used = np.concatenate([left, right, midline, fixed])
+    scale = coincident * float(np.linalg.norm(np.ptp(points[used], axis=0)) or 1.0)
+    cells = np.round(points[used] / scale).astype(np.int64)
+    _, inverse, counts = np.unique(cells, axis=0, return_inverse=True, return_counts=True)
+    shared = counts[inverse.ravel()] > 1
+    n = len(left)
+    keep = ~shared[:n] & ~shared[n:2 * n]
+    return left[keep], right[keep], midline[~shared[2 * n:2 * n + len(midline)]]

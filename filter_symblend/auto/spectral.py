@@ -1,0 +1,223 @@
+"""The shape's intrinsic mirror symmetry, from the Laplace-Beltrami operator of its surface.
+
+Bending a shape and swinging its limbs barely change distances measured along the surface, and so
+barely change the eigenfunctions of its Laplace-Beltrami operator. A mirror symmetry maps the
+surface onto itself preserving those distances, so each eigenfunction (of a simple eigenvalue) is
+even or odd under it, and in the eigenbasis the mirror is the functional map diagonal with +1 and
+-1 (Ovsjanikov, Sun and Guibas, *Global intrinsic symmetries of shapes*, SGP 2008). Which sign goes
+with which function is found in closed form, without any guess of the mirror, by one linear least
+squares problem (Ren, Poulenard, Wonka and Ovsjanikov, *Continuous and orientation-preserving
+correspondences via functional maps*, SIGGRAPH Asia 2018):
+
+- the mirror keeps functions the shape defines intrinsically (heat kernel signatures at several
+  scales, which are even), ``C A = A``;
+- it commutes with the operator, ``C Lambda = Lambda C`` (block diagonal where eigenvalues repeat);
+- it reverses the surface's orientation: for an even function f, the operator
+  g -> <n, grad f x grad g> anticommutes with it, ``C O_f = -O_f C``. This is what tells the mirror
+  from the identity, which satisfies the other two.
+
+The map is then refined to a point map by ZoomOut (Melzi et al., SIGGRAPH Asia 2019): point map ->
+functional map on k functions -> point map, with k growing, each functional map projected onto the
+symmetric orthogonal matrices (a mirror applied twice is the identity).
+
+A compression changes surface distances, and a strong bend of a thick shape stretches one flank and
+shrinks the other; the result is then a rough map, refined extrinsically afterwards
+(:mod:`.field`). Large meshes are first coarsened by vertex clustering (:func:`working_mesh`): the
+low eigenfunctions do not need every vertex.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import scipy.sparse as sparse
+from scipy.sparse.csgraph import connected_components
+from scipy.sparse.linalg import ArpackNoConvergence, eigsh
+from scipy.spatial import cKDTree
+
+from ..core.geometry import voxel_grid
+from .config import AutoConfig
+from .graph import vertex_adjacency
+
+
+@dataclasses.dataclass(frozen=True)
+class WorkingMesh:
+    """A connected triangle mesh for the spectral map: ``points`` (n, 3), ``faces`` (f, 3), and
+    ``vertex_of`` (N,): the vertex of it that each input vertex is clustered into (-1: none)."""
+
+    points: np.ndarray
+    faces: np.ndarray
+    vertex_of: np.ndarray
+
+
+def working_mesh(points: np.ndarray, faces: np.ndarray, usable: np.ndarray, config: AutoConfig) -> WorkingMesh | None:
+    """The largest connected piece (by area) of the triangles among ``usable`` (N,) bool vertices, coarsened
+    by vertex clustering on a voxel grid to about ``config.spectral_vertices`` vertices if larger; None if no
+    piece has enough triangles for a spectrum."""
+    keep = usable[faces].all(axis=1)
+    faces = faces[keep]
+    if not len(faces):
+        return None
+    index = np.flatnonzero(usable)
+    cluster = np.full(len(points), -1)
+    if len(index) > config.spectral_vertices:
+        keys = voxel_grid(points[index], config.spectral_vertices, steps=16)
+        _, cluster[index] = np.unique(keys, return_inverse=True)
+    else:
+        cluster[index] = np.arange(len(index))
+    count = int(cluster.max()) + 1
+    coarse = cluster[faces]
+    coarse = coarse[(coarse[:, 0] != coarse[:, 1]) & (coarse[:, 1] != coarse[:, 2]) & (coarse[:, 0] != coarse[:, 2])]
+    if not len(coarse):
+        return None
+    coarse = coarse[np.unique(np.sort(coarse, axis=1), axis=0, return_index=True)[1]]
+    centres = np.zeros((count, 3))
+    np.add.at(centres, cluster[index], points[index])
+    centres /= np.maximum(np.bincount(cluster[index], minlength=count), 1)[:, None]
+    corners = centres[coarse]
+    area = np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+    coarse, area = coarse[area > 0], area[area > 0]
+    _, piece = connected_components(vertex_adjacency(coarse, count), directed=False)
+    largest = np.argmax(np.bincount(piece[coarse[:, 0]], weights=area))
+    coarse = coarse[piece[coarse[:, 0]] == largest]
+    if len(coarse) < 4 * config.spectral_start:
+        return None
+    used = np.unique(coarse)
+    renumber = np.full(count + 1, -1)  # the last entry: vertices in no cluster (-1) stay -1
+    renumber[used] = np.arange(len(used))
+    return WorkingMesh(centres[used], renumber[coarse], renumber[cluster])
+
+
+def cotangent_laplacian(points: np.ndarray, faces: np.ndarray) -> tuple[sparse.csr_matrix, np.ndarray]:
+    """The cotangent stiffness matrix (n, n) (positive semidefinite) and the lumped mass (n,) (a third of
+    the area of the triangles around each vertex) of the triangles ``faces`` (f, 3) with an area."""
+    corners = points[faces]
+    doubled = np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+    rows, columns, weights = [], [], []
+    for k in range(3):
+        i, j = faces[:, (k + 1) % 3], faces[:, (k + 2) % 3]
+        u, v = corners[:, (k + 1) % 3] - corners[:, k], corners[:, (k + 2) % 3] - corners[:, k]
+        half_cotangent = 0.5 * np.einsum("ij,ij->i", u, v) / doubled
+        rows += [i, j]
+        columns += [j, i]
+        weights += [half_cotangent, half_cotangent]
+    n = len(points)
+    off = sparse.csr_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(columns))), shape=(n, n))
+    stiffness = sparse.diags(np.asarray(off.sum(axis=1)).ravel()) - off
+    mass = np.bincount(faces.ravel(), np.repeat(doubled / 6.0, 3), minlength=n)
+    return stiffness.tocsr(), mass
+
+
+@dataclasses.dataclass(frozen=True)
+class Eigenbasis:
+    """The lowest eigenpairs of the Laplace-Beltrami operator: ``values`` (k,) ascending, ``functions``
+    (n, k) orthonormal in the ``mass`` (n,) inner product."""
+
+    values: np.ndarray
+    functions: np.ndarray
+    mass: np.ndarray
+
+
+def eigenbasis(points: np.ndarray, faces: np.ndarray, count: int) -> Eigenbasis | None:
+    """The ``count`` lowest eigenpairs (shift-invert Lanczos, scipy's ``eigsh``), or None if they do not
+    converge."""
+    stiffness, mass = cotangent_laplacian(points, faces)
+    mass = np.maximum(mass, 1e-12 * mass.max())
+    count = min(count, len(points) - 2)
+    shift = -1e-8 * float(np.abs(stiffness.diagonal()).mean() / mass.mean())
+    try:
+        values, functions = eigsh(stiffness, k=count, M=sparse.diags(mass), sigma=shift, which="LM")
+    except (ArpackNoConvergence, RuntimeError):
+        return None
+    order = np.argsort(values)
+    return Eigenbasis(values[order], functions[:, order], mass)
+
+
+def heat_kernel_signatures(basis: Eigenbasis, scales: int) -> np.ndarray:
+    """(n, scales) heat kernel signatures (Sun, Ovsjanikov and Guibas 2009) at times spread between the
+    heat's decay over the highest and the lowest non-zero eigenvalue, each normalized to unit mass norm."""
+    times = np.geomspace(4.0 * np.log(10.0) / basis.values[-1], 4.0 * np.log(10.0) / basis.values[1], scales)
+    signatures = (basis.functions ** 2) @ np.exp(-np.outer(basis.values, times))
+    return signatures / np.sqrt((basis.mass[:, None] * signatures ** 2).sum(axis=0))
+
+
+def orientation_operators(points: np.ndarray, faces: np.ndarray, functions: np.ndarray,
+                          descriptors: np.ndarray) -> np.ndarray:
+    """(d, k, k): for each descriptor f (column of ``descriptors`` (n, d)), the matrix of
+    g -> <n, grad f x grad g> in the basis ``functions`` (n, k): entry (i, j) is the integral of
+    phi_i <n, grad f x grad phi_j>, with gradients constant on each triangle."""
+    corners = points[faces]
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    doubled = np.linalg.norm(normal, axis=1)
+    normal /= doubled[:, None]
+    values = np.column_stack([descriptors, functions])
+    gradient = np.zeros((len(faces), 3, values.shape[1]))
+    for k in range(3):
+        edge = corners[:, (k + 2) % 3] - corners[:, (k + 1) % 3]  # the edge opposite corner k
+        gradient += (np.cross(normal, edge) / doubled[:, None])[:, :, None] * values[faces[:, k]][:, None, :]
+    d = descriptors.shape[1]
+    on_faces = functions[faces].mean(axis=1) * (0.5 * doubled)[:, None]  # phi_i times the triangle's area
+    operators = np.empty((d, functions.shape[1], functions.shape[1]))
+    for index in range(d):
+        crossed = np.cross(gradient[:, :, index][:, :, None], gradient[:, :, d:], axisa=1, axisb=1, axisc=1)
+        operators[index] = on_faces.T @ np.einsum("fa,fak->fk", normal, crossed)
+    return operators
+
+
+def closest_symmetric_orthogonal(matrix: np.ndarray) -> np.ndarray:
+    """The symmetric orthogonal matrix (an involution) nearest ``matrix`` (k, k)."""
+    values, vectors = np.linalg.eigh(0.5 * (matrix + matrix.T))
+    return (vectors * np.where(values >= 0, 1.0, -1.0)) @ vectors.T
+
+
+def mirror_functional_map(points: np.ndarray, faces: np.ndarray, basis: Eigenbasis, count: int,
+                          config: AutoConfig) -> np.ndarray:
+    """The (count, count) functional map of the orientation-reversing intrinsic symmetry on the first
+    ``count`` eigenfunctions (see the module doc), projected onto the involutions."""
+    functions = basis.functions[:, :count]
+    descriptors = heat_kernel_signatures(basis, config.descriptor_scales)
+    coefficients = functions.T @ (basis.mass[:, None] * descriptors)  # (count, d), preserved by the mirror
+    operators = orientation_operators(points, faces, functions, descriptors)
+    identity = np.eye(count)
+    scale = np.linalg.norm(coefficients)
+    # Unknown vec(C), column-major: vec(C A) = (A^T kron I) vec(C), vec(C O + O C) = (O^T kron I + I kron O) vec(C).
+    rows = [np.kron(coefficients.T, identity)]
+    right = [coefficients.reshape(-1, order="F")]
+    for operator in operators:
+        operator = operator * (scale / (np.linalg.norm(operator) or 1.0))
+        rows.append(np.kron(operator.T, identity) + np.kron(identity, operator))
+        right.append(np.zeros(count * count))
+    values = basis.values[:count] / basis.values[count - 1]
+    gaps = (values[:, None] - values[None, :]) ** 2
+    rows.append(config.commutativity_weight * scale * np.diag(gaps.reshape(-1, order="F")))
+    right.append(np.zeros(count * count))
+    solution = np.linalg.lstsq(np.vstack(rows), np.concatenate(right), rcond=None)[0]
+    return closest_symmetric_orthogonal(solution.reshape(count, count, order="F"))
+
+
+def point_map(functions: np.ndarray, functional: np.ndarray) -> np.ndarray:
+    """(n,) vertex map of a functional map: each vertex goes to the vertex whose spectral coordinates are
+    nearest its own mapped ones (``functions`` (n, k) @ ``functional`` (k, k))."""
+    return cKDTree(functions).query(functions @ functional)[1]
+
+
+def zoomout(basis: Eigenbasis, vertex_map: np.ndarray, start: int, stop: int, step: int) -> np.ndarray:
+    """ZoomOut: the vertex map refined on ``start``..``stop`` eigenfunctions, ``step`` at a time."""
+    for count in range(start, stop + 1, step):
+        functions = basis.functions[:, :count]
+        functional = functions.T @ (basis.mass[:, None] * functions[vertex_map])
+        vertex_map = point_map(functions, closest_symmetric_orthogonal(functional))
+    return vertex_map
+
+
+def intrinsic_mirror(mesh: WorkingMesh, config: AutoConfig) -> np.ndarray | None:
+    """(n,) the intrinsic mirror of ``mesh`` as a vertex map of its vertices, or None if its spectrum
+    cannot be computed."""
+    basis = eigenbasis(mesh.points, mesh.faces, config.spectral_functions)
+    if basis is None or len(basis.values) < config.spectral_start + 2:
+        return None
+    start = config.spectral_start
+    functional = mirror_functional_map(mesh.points, mesh.faces, basis, start, config)
+    first = point_map(basis.functions[:, :start], functional)
+    return zoomout(basis, first, start, len(basis.values), config.zoomout_step)
