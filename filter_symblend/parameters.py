@@ -129,13 +129,13 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter(
         "pairs", "enum", "landmarks", "Pairs",
         "Where the mirror pairs come from. 'landmarks': the pair attribute (the paper). 'auto': found on "
-        "the surface, no landmarks needed. Every vertex's twin is predicted by a mirror map (the best mirror "
-        "plane; where it leaves much of the surface without a mirror image, the whitened plane for a shape "
-        "compressed or sheared as a whole, then the reflection registered onto the shape for a bent one); "
-        "on a mesh whose vertices mirror each other the twins are exact vertices, grown from the sure ones "
-        "along the surface by local mirror maps, elsewhere points of the surface. Then the output is paired "
-        "again, by its own plane, while that changes it. A shape most of whose surface has no mirror image "
-        "under any map is refused. 'landmarks+auto': the landmarks are solved first, then automatic pairs "
+        "the surface, no landmarks needed. Every vertex's twin is predicted by the mirror map that mirrors "
+        "the most of the surface: the best mirror planes, the whitened plane (a shape compressed or sheared "
+        "as a whole), or a smooth mirror field registered onto the surface from them, from their coherent "
+        "point drift or from the shape's intrinsic mirror (a bent one); on a mesh whose vertices mirror each "
+        "other the twins are exact vertices, grown from the sure ones along the surface by local mirror "
+        "maps, elsewhere points of the surface. Then the output is paired again while that makes it more "
+        "symmetric. A shape most of whose surface has no mirror image under any map is refused. 'landmarks+auto': the landmarks are solved first, then automatic pairs "
         "found on that output join them and the solve is repeated, so the whole surface, not only the "
         "landmarks, comes out symmetric; the landmarks are always kept and weigh `landmark_priority` times "
         "more.",

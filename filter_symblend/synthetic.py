@@ -158,6 +158,13 @@ class SurfaceTruth:
         return self.left[chosen], cKDTree(self.points).query(twins[chosen])[1]
 
 
+def vertex_truth(points: np.ndarray, faces: np.ndarray, left: np.ndarray, right: np.ndarray) -> SurfaceTruth:
+    """The :class:`SurfaceTruth` of a mesh whose ``left`` (m,) vertices have exact twins ``right`` (m,)."""
+    weights = np.zeros((len(left), 3))
+    weights[:, 0] = 1.0
+    return SurfaceTruth(points, faces, left, np.repeat(right[:, None], 3, axis=1), weights)
+
+
 def surface_truth(points: np.ndarray, faces: np.ndarray, offset: float, on_surface: float = 2e-3) -> SurfaceTruth:
     """The :class:`SurfaceTruth` of a mesh symmetric across x = ``offset``: every vertex on the left whose
     reflection lies within ``on_surface`` x diagonal of the surface (where it is symmetric)."""

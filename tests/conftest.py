@@ -11,6 +11,7 @@ import pymeshlab
 import pytest
 
 from filter_symblend import synthetic
+from filter_symblend.meshlab.ground_truth import remeshed
 
 SAMPLE_MESHES = pathlib.Path(pymeshlab.__file__).parent / "tests" / "sample_meshes"
 SHARED_DATA = pathlib.Path(__file__).resolve().parents[1].parent / "shared" / "data"
@@ -63,20 +64,10 @@ def symmetric_mesh(request) -> GroundTruth:
 
 
 def remeshed_ground_truth(path: os.PathLike, edge_percent: float) -> synthetic.SurfaceTruth:
-    """The exactly symmetric mesh at ``path`` remeshed isotropically (edges ``edge_percent`` of the diagonal),
-    so that no vertex has an exact twin; its twins are points of the surface."""
+    """The exactly symmetric mesh at ``path`` remeshed (edges ``edge_percent`` % of the diagonal): no vertex
+    has an exact twin."""
     truth = load_ground_truth(path)
-    ms = pymeshlab.MeshSet()
-    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=truth.points, face_matrix=truth.faces))
-    # One side's triangles split first (the surface unchanged), so that the remeshing does not mirror itself.
-    ms.compute_selection_by_condition_per_face(condselect=f"(x0 + x1 + x2) / 3 > {float(truth.offset)!r}")
-    ms.meshing_surface_subdivision_midpoint(iterations=1, threshold=pymeshlab.PercentageValue(0.0), selected=True)
-    ms.set_selection_none()
-    ms.meshing_isotropic_explicit_remeshing(iterations=6, targetlen=pymeshlab.PercentageValue(edge_percent),
-                                            featuredeg=180.0)  # no crease kept: no original vertex stays
-    ms.meshing_remove_unreferenced_vertices()
-    mesh = ms.current_mesh()
-    return synthetic.surface_truth(mesh.vertex_matrix(), mesh.face_matrix(), truth.offset)
+    return remeshed(truth.points, truth.faces, truth.offset, edge_percent)
 
 
 @pytest.fixture(scope="session")

@@ -43,8 +43,9 @@ class AutoConfig:
         "(53 %)")
     field_suffices: float = _field(
         0.98, "share of the surface",
-        "when one registered candidate already mirrors this much of the surface, the costlier ones are not "
-        "tried: what is left is a strip along the midline and the scan's own asymmetry")
+        "when one registered candidate already mirrors this much of the surface (plane_suffices if a plane "
+        "mirrors min_coverage: a scan, not a strong bend), the costlier ones are not tried: what is left is a "
+        "strip along the midline and the scan's own asymmetry")
     ratio: float = _field(
         0.5, "nearest / second-nearest distance",
         "a predicted twin is taken as a vertex only if that vertex is the unambiguous nearest one (Lowe's "
@@ -172,6 +173,10 @@ class AutoConfig:
         1500, "vertices",
         "vertices the winning mirror field is registered on: enough for every kernel centre to see several "
         "of them within a width")
+    cpd_min_deviation: float = _field(
+        0.3, "x mean vertex spacing",
+        "the coherent point drift's mixture spread never falls below this: below a third of the spacing its "
+        "posteriors pick single vertices and the drift follows the sampling, not the shape")
     cpd_samples: int = _field(
         1000, "vertices",
         "points of the coherent point drift registration (its cost grows with their square)")

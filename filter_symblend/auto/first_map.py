@@ -98,7 +98,7 @@ def _drift_predictions(start: MirrorMap, x: np.ndarray, config: AutoConfig) -> n
     sample = registration_sample(surface, config.cpd_samples, config.cpd_pool)
     points, normals = surface.points[sample], surface.normals[sample]
     drift = coherent_point_drift(points, start.predict(points), normals, start.mirror_normals(normals, points),
-                                 0.3 * surface.spacing, config)
+                                 config.cpd_min_deviation * surface.spacing, config)
     return drift(start.predict(x))
 
 
@@ -140,7 +140,7 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress
     if mirrored is not None:  # the tessellation mirrors itself: its own mirror, exact whatever the bend
         shares[mirrored.name] = coverage(mirrored, scored, config)
         return mirrored, shares, planes[0]
-    if isinstance(surface, Outline) or shares[ranked[0].name] >= config.plane_suffices:
+    if shares[ranked[0].name] >= config.plane_suffices:
         return _refuse_or(ranked[0], shares, config), shares, planes[0]
     screening = _strided(surface, config.screening_samples)
     coarse = config.field_widths[0] * surface.diagonal
@@ -154,8 +154,9 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress
         mirror = field_map(surface, field, f"registration from the {name}")
         shares[mirror.name] = coverage(mirror, scored, config)
         candidates.append((mirror, field))
-        if shares[mirror.name] >= config.field_suffices:
-            break
+        nearly_rigid = shares[ranked[0].name] >= config.min_coverage  # a scan: a plane mirrors most of it
+        if shares[mirror.name] >= (config.plane_suffices if nearly_rigid else config.field_suffices):
+            break  # the costlier starts are for shapes no plane mirrors (a strong bend)
     coarse_best, field = max(candidates, key=lambda entry: shares[entry[0].name])
     if progress is not None:
         progress(60.0, f"{coarse_best.name}, on {config.registration_samples} vertices")
