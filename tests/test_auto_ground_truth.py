@@ -65,8 +65,9 @@ def test_a_swung_limb_comes_back_symmetric(cow):
     assert after < 0.1 * before
 
 
-@pytest.mark.xfail(strict=True, reason="a target missed (issue 33): bent 1.2 rad, the best map mirrors 91 % of the "
-                   "pieces within 1 % but pairs them wrongly; the output is less symmetric than the input")
+@pytest.mark.xfail(strict=True, reason="a target missed (issue 33): bent 1.2 rad in this pose, the best map mirrors "
+                   "91 % of the pieces within 1 % but pairs them wrongly, and the output is less symmetric than the "
+                   "input (in the corpus benchmark's pose the same mesh comes back exact)")
 def test_several_pieces_strongly_bent_come_back_symmetric():
     points, faces = synthetic.several_pieces(3)
     offset, partner = synthetic.mirror_partners(points)

@@ -146,6 +146,9 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress
     coarse = config.field_widths[0] * surface.diagonal
     centres = field_centres(surface, screening, config.screening_centres)
     candidates = []
+    # A scan (a plane mirrors most of it) stops at the first field that mirrors as much as a plane would
+    # need to; the costlier starts are for shapes no plane mirrors (a strong bend).
+    enough = config.plane_suffices if shares[ranked[0].name] >= config.min_coverage else config.field_suffices
     for index, (name, vertices, twins) in enumerate(_starts(surface, screening, ranked, config)):
         if progress is not None:
             progress(min(60.0, 8.0 * index), f"finding a mirror map: {name}")
@@ -154,9 +157,8 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress
         mirror = field_map(surface, field, f"registration from the {name}")
         shares[mirror.name] = coverage(mirror, scored, config)
         candidates.append((mirror, field))
-        nearly_rigid = shares[ranked[0].name] >= config.min_coverage  # a scan: a plane mirrors most of it
-        if shares[mirror.name] >= (config.plane_suffices if nearly_rigid else config.field_suffices):
-            break  # the costlier starts are for shapes no plane mirrors (a strong bend)
+        if shares[mirror.name] >= enough:
+            break
     coarse_best, field = max(candidates, key=lambda entry: shares[entry[0].name])
     if progress is not None:
         progress(60.0, f"{coarse_best.name}, on {config.registration_samples} vertices")
@@ -185,18 +187,18 @@ def _refuse_or(best: MirrorMap, shares: dict, config: AutoConfig, scored: np.nda
     listed = ", ".join(f"{name} {value:.0%}" for name, value in shares.items())
     found = f"mirrors {share:.0%} of the surface within {100 * config.landing_tolerance:g}% of its size"
     needs = f"needs {config.min_coverage:.0%}"
-    if scored is not None and share >= config.min_coverage:
+    refused = share < config.min_coverage
+    if scored is not None and not refused:
         tolerance = config.field_precision * config.landing_tolerance
-        precise = coverage(best, scored, config, config.field_precision)
-        shares[f"{best.name}, within {100 * tolerance:g}%"] = precise
-        if precise < config.precise_coverage:
-            share = precise
-            found += (f" but {precise:.0%} within {100 * tolerance:g}%, where a field fitted onto the surface "
-                      "lands on a symmetric shape")
-            needs = f"needs {config.precise_coverage:.0%} there"
-    if share < config.min_coverage or needs.endswith("there"):
+        precise = shares[f"{best.name}, within {100 * tolerance:g}%"] = coverage(best, scored, config,
+                                                                                 config.field_precision)
+        refused = precise < config.precise_coverage
+        found += (f" but {precise:.0%} within {100 * tolerance:g}%, where a field fitted onto the surface lands "
+                  "on a symmetric shape")
+        needs = f"needs {config.precise_coverage:.0%} there"
+    if refused:
         raise SymmetryNotFoundError(
             f"No mirror symmetry found: the best mirror map ({best.name}) {found} ({listed}); a mirror-symmetric "
-            f"shape, even bent or compressed, {needs}. Place landmark pairs and use "
-            "pairs='landmarks' (or 'landmarks+auto').")
+            f"shape, even bent or compressed, {needs}. Place landmark pairs and use pairs='landmarks' "
+            "(or 'landmarks+auto').")
     return best
