@@ -267,7 +267,7 @@ def test_every_corpus_mesh_is_symmetrized_or_refused_as_its_symmetry_says():
         assert result.points.shape == points.shape
         outcomes[name] = "ok"
     print(outcomes)
-    assert len(outcomes) >= 5  # pymeshlab's samples at least
+    assert len(outcomes) >= 4  # pymeshlab's four samples at least
     assert all(outcomes[name] == "ok" for name in SYMMETRIC & set(outcomes)), outcomes
     assert all(outcomes[name].startswith("refused: No mirror symmetry found") for name in NOT_SYMMETRIC & set(outcomes))
 
