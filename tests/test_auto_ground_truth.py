@@ -8,8 +8,10 @@ import numpy as np
 import pytest
 
 from filter_symblend import SymblendWarning, symmetrize, synthetic
+from filter_symblend.auto import AutoConfig
+from filter_symblend.auto.spectral import intrinsic_mirror, working_mesh
 
-from conftest import twins
+from conftest import symmetric_blob, twins
 
 
 def _landmarks_alone(deformed, left, right, mode):
@@ -117,3 +119,14 @@ def test_the_automatic_pairs_layer_has_no_import_circle():
     for module in imports:
         visit(module)
     assert {"connectivity", "growth", "surface", "graph"} <= set(imports)
+
+
+def test_the_intrinsic_mirror_of_an_exactly_symmetric_mesh_is_its_mirror_in_any_pose():
+    """The Laplace-Beltrami map sees no pose: posed anyhow, the bumpy blob's intrinsic mirror sends every
+    vertex to its exact twin."""
+    points, faces = symmetric_blob(4)
+    posed = synthetic.random_rigid(points, seed=3)
+    mesh = working_mesh(posed, faces, np.ones(len(points), dtype=bool), AutoConfig())
+    twin = intrinsic_mirror(mesh, AutoConfig())
+    assert mesh.vertex_of.min() >= 0
+    np.testing.assert_array_equal(mesh.points[twin[mesh.vertex_of]], posed[twins(points)])
