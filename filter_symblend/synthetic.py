@@ -10,6 +10,7 @@ import dataclasses
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .auto.surface import barycentric, vertex_points
 from .core.geometry import normalize, rotation_about_axis, similarity_fit, voxel_grid
 from .core.landmark_asymmetry import fit_mirror_plane
 from .core.mesh_quantities import farthest_point_order
@@ -160,16 +161,12 @@ class SurfaceTruth:
 
 def vertex_truth(points: np.ndarray, faces: np.ndarray, left: np.ndarray, right: np.ndarray) -> SurfaceTruth:
     """The :class:`SurfaceTruth` of a mesh whose ``left`` (m,) vertices have exact twins ``right`` (m,)."""
-    weights = np.zeros((len(left), 3))
-    weights[:, 0] = 1.0
-    return SurfaceTruth(points, faces, left, np.repeat(right[:, None], 3, axis=1), weights)
+    return SurfaceTruth(points, faces, left, *vertex_points(right))
 
 
 def surface_truth(points: np.ndarray, faces: np.ndarray, offset: float, on_surface: float = 2e-3) -> SurfaceTruth:
     """The :class:`SurfaceTruth` of a mesh symmetric across x = ``offset``: every vertex on the left whose
     reflection lies within ``on_surface`` x diagonal of the surface (where it is symmetric)."""
-    from .auto.surface import barycentric
-
     mirrored = points * [-1.0, 1.0, 1.0] + [2.0 * offset, 0.0, 0.0]
     face, closest, distance = TriangleSurface(points, faces).nearest(mirrored)
     diagonal = np.linalg.norm(np.ptp(points, axis=0))

@@ -99,13 +99,17 @@ def test_a_strongly_bent_mirrored_tessellation_comes_back_exactly_symmetric():
     assert synthetic.symmetry_error(result.points, spot.all_left, spot.all_right) < 1e-9
 
 
-def test_several_pieces_each_paired_with_its_mirror_piece_or_itself():
+@pytest.mark.parametrize("angle", [0.6, pytest.param(1.2, marks=pytest.mark.xfail(
+    strict=True, reason="a target missed (issue 33): bent 1.2 rad in this pose, the best map mirrors 91 % of the "
+    "pieces within 1 % but pairs them wrongly, and the output is less symmetric than the input (in the corpus "
+    "benchmark's pose the same mesh comes back exact)"))])
+def test_several_pieces_each_paired_with_its_mirror_piece_or_itself(angle):
     """Five separate closed pieces (a body, a lid and a spout on the plane, two ears each other's mirror
     image), bent: the pieces come back symmetric, the ears with each other."""
     points, faces = synthetic.several_pieces(3)
     offset, partner = synthetic.mirror_partners(points)
     left = np.flatnonzero((partner >= 0) & (points[:, 0] > offset))
-    bent = synthetic.random_rigid(synthetic.bend(points, 0.6), seed=3)
+    bent = synthetic.random_rigid(synthetic.bend(points, angle), seed=3)
     result = symmetrize(bent, faces=faces, pairs="auto", mode="affine")
     before, after = (synthetic.symmetry_error(p, left, partner[left]) for p in (bent, result.points))
     ears = np.flatnonzero(np.linalg.norm(points - [0.95, 0.55, -0.3], axis=1) < 0.3)

@@ -61,6 +61,11 @@ class MirrorField:
         return normalize(np.linalg.solve(np.transpose(jacobians, (0, 2, 1)), normals[:, :, None])[:, :, 0])
 
 
+def robust_tolerance(values: np.ndarray, config: AutoConfig, floor: float) -> float:
+    """``robust_sigmas`` robust standard deviations of ``values`` (taken as |N(0, sigma)|), at least ``floor``."""
+    return max(config.robust_sigmas * 1.4826 * float(np.median(values)), floor) if len(values) else floor
+
+
 def _ridge_solve(matrix: np.ndarray, right: np.ndarray, ridge: float) -> np.ndarray:
     size = len(matrix)
     return np.linalg.solve(matrix + ridge * np.trace(matrix) / size * np.eye(size), right)
@@ -98,7 +103,7 @@ def robust_fit(x: np.ndarray, y: np.ndarray, centres: np.ndarray, width: float, 
     for _ in range(config.robust_rounds):
         fit_to_pairs(field, x, y, weights, config.field_ridge)
         misfit = np.linalg.norm(field(x) - y, axis=1)
-        scaled = misfit / (config.robust_sigmas * 1.4826 * np.median(misfit) + 1e-300)
+        scaled = misfit / robust_tolerance(misfit, config, 1e-300)
         weights = (1.0 - np.minimum(scaled, 1.0) ** 2) ** 2  # Tukey: zero beyond the bound
     return field
 
@@ -132,7 +137,7 @@ def register(field: MirrorField, surface, sample: np.ndarray, iterations: int, c
         near = facing > config.facing
         if not near.any():
             break
-        bound = max(config.robust_sigmas * 1.4826 * float(np.median(distance[near])), floor)
+        bound = robust_tolerance(distance[near], config, floor)
         weights = (near & (distance <= bound)).astype(float)
         # A landed image z with normal n: n . (reflect(x) + K(x) W) = n . z
         target = np.einsum("ij,ij->i", landed_normals, landed - reflected)

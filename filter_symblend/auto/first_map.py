@@ -31,10 +31,9 @@ from ..checks.surface_asymmetry import surface_mirror_planes
 from ..errors import SymmetryNotFoundError
 from .config import AutoConfig
 from .connectivity import tessellation_mirror
-from .field import MirrorField, field_centres, refitted, register, robust_fit
+from .field import MirrorField, field_centres, refitted, register, robust_fit, robust_tolerance
 from .graph import one_pair_per_vertex
 from .maps import MirrorMap, affine_map, field_map, pairs_map, plane_map
-from .pairs import robust_tolerance
 from .registration import coherent_point_drift, registration_sample
 from .spectral import intrinsic_mirror, working_mesh
 from .surface import Outline, Surface

@@ -5,10 +5,11 @@ consistent about (it does not come back, the two do not face the mirrored way) o
 surface are dropped, and the share kept of those that landed is the round's ``consistency``. Then:
 
 - On a mesh whose vertices mirror each other (a mirrored model, a symmetric template warped onto a
-  specimen), a third or more of the twins are exact vertices at once (unambiguous, mutual, as precise
-  as the map): those seed a growth along the surface by local mirror maps, pairs their neighbours
-  contradict are pruned (:mod:`.growth`), and the tessellation's own mirror (:mod:`.connectivity`)
-  pairs what the geometry cannot. The pairs are vertex pairs, exact.
+  specimen), the twins that are vertices (unambiguous, mutual, within ``vertex_precision`` of the local
+  spacing) seed a growth along the surface by local mirror maps, pairs their neighbours contradict are
+  pruned (:mod:`.growth`), and the tessellation's own mirror (:mod:`.connectivity`) pairs what the
+  geometry cannot. If that pairs ``vertex_share`` of the vertices, the pairs are these vertex pairs,
+  exact.
 - Otherwise (a scan, a remeshed surface: the two sides sampled independently) a vertex's twin is a
   point of the surface, inside a triangle: the pair joins the solve as the vertex and that point (a
   barycentric combination of the triangle's corners, the same material point on the input as on any
@@ -30,10 +31,11 @@ from ..core.symmetrize import CheckedLandmarks, check_landmarks
 from ..errors import GeometryError
 from .config import AutoConfig
 from .connectivity import ring_consistent, tessellation_mirror
+from .field import robust_tolerance
 from .graph import one_pair_per_vertex
 from .growth import grow_and_prune
 from .maps import MirrorMap
-from .surface import Surface
+from .surface import Surface, vertex_points
 from .twins import find_twins
 
 
@@ -58,18 +60,6 @@ def spread(points: np.ndarray, vertices: np.ndarray, count: int) -> np.ndarray:
     keys = voxel_grid(points[vertices], count, steps=16)
     _, first = np.unique(keys, return_index=True)
     return vertices[np.sort(first)]
-
-
-def robust_tolerance(values: np.ndarray, config: AutoConfig, floor: float) -> float:
-    """``robust_sigmas`` robust standard deviations of ``values`` (taken as |N(0, sigma)|), at least ``floor``."""
-    return max(config.robust_sigmas * 1.4826 * float(np.median(values)), floor) if len(values) else floor
-
-
-def _vertex_twins(vertices: np.ndarray):
-    """Corners (n, 3) and weights (n, 3) of twins that are the ``vertices`` (n,) themselves."""
-    weights = np.zeros((len(vertices), 3))
-    weights[:, 0] = 1.0
-    return np.repeat(vertices[:, None], 3, axis=1), weights
 
 
 def find_pairs(mirror: MirrorMap, geometry: Surface, sources: np.ndarray, fixed: CheckedLandmarks | None,
@@ -113,7 +103,7 @@ def _point_pairs(surface: Surface, sources: np.ndarray, twins, rows: np.ndarray)
     itself = np.linalg.norm(twins.point[rows] - surface.points[sources[rows]], axis=1) \
         <= 0.5 * surface.local_spacing[sources[rows]]
     midline, rows = sources[rows[itself]], rows[~itself]
-    own_corners, own_weights = _vertex_twins(sources[rows])
+    own_corners, own_weights = vertex_points(sources[rows])
     left = twins.side[rows] > 0
     pick = lambda a, b: np.where(left[:, None], a, b)  # noqa: E731
     return (pick(own_corners, twins.corners[rows]), pick(own_weights, twins.weights[rows]),
@@ -130,8 +120,7 @@ def _exact_pairs(mirror, geometry, sources, twins, exact_twins, fixed, forbidden
     n = len(surface.points)
     index = np.arange(n)
     partner = np.full(n, -1)
-    if fixed is not None:
-        partner[fixed.left], partner[fixed.right], partner[fixed.midline] = fixed.right, fixed.left, fixed.midline
+    _hold_landmarks(partner, fixed)
     seeds, twin = one_pair_per_vertex(sources[exact_twins], twins.vertex[exact_twins])
     partner[seeds], partner[twin] = twin, seeds
     in_sample = np.zeros(n, dtype=bool)
@@ -147,9 +136,7 @@ def _exact_pairs(mirror, geometry, sources, twins, exact_twins, fixed, forbidden
             # exact whatever the geometry around them (a joint), and so are not pruned.
             whole = ring_consistent(surface.adjacency, mirrored) & ~forbidden
             partner[:] = np.where(whole, mirrored, -1)
-            if fixed is not None:
-                partner[fixed.left], partner[fixed.right] = fixed.right, fixed.left
-                partner[fixed.midline] = fixed.midline
+            _hold_landmarks(partner, fixed)
             info.update(grow_and_prune(surface, geometry, partner, in_sample & ~forbidden,
                                        surface.usable & ~forbidden, forbidden | whole, config, floor))
     automatic = (partner >= 0) & ~forbidden
@@ -161,8 +148,14 @@ def _exact_pairs(mirror, geometry, sources, twins, exact_twins, fixed, forbidden
     candidates = np.concatenate([left, midline])
     chosen = spread(surface.points, candidates, count)
     on_plane = partner[chosen] == chosen
-    return AutomaticPairs(*_vertex_twins(chosen[~on_plane]), *_vertex_twins(partner[chosen[~on_plane]]),
+    return AutomaticPairs(*vertex_points(chosen[~on_plane]), *vertex_points(partner[chosen[~on_plane]]),
                           chosen[on_plane], {**info, "twins_are": "exact vertices", "candidates": len(candidates)})
+
+
+def _hold_landmarks(partner: np.ndarray, fixed: CheckedLandmarks | None) -> None:
+    """Set (in place) the user's landmark pairs and midline points in ``partner`` (N,)."""
+    if fixed is not None:
+        partner[fixed.left], partner[fixed.right], partner[fixed.midline] = fixed.right, fixed.left, fixed.midline
 
 
 def _on_points(points: np.ndarray, corners: np.ndarray, weights: np.ndarray, first: int):

@@ -130,10 +130,7 @@ class Surface:
         if not self.is_mesh:
             distance, nearest = self.vertex_tree.query(queries)
             vertex = self.usable_index[nearest]
-            corners = np.repeat(vertex[:, None], 3, axis=1)
-            weights = np.zeros((len(queries), 3))
-            weights[:, 0] = 1.0
-            return self.points[vertex], distance, self.normals[vertex], corners, weights
+            return self.points[vertex], distance, self.normals[vertex], *vertex_points(vertex)
         face, point, distance = self._triangle_surface.nearest(queries)
         corners = self.faces[self.triangles[face]]
         return point, distance, self.face_normals[face], corners, barycentric(self.points[corners], point)
@@ -151,6 +148,14 @@ class Surface:
         second = distance[:, -1] if k == 2 else np.full(len(queries), np.inf)
         ratio = np.divide(distance[:, 0], second, out=np.zeros(len(queries)), where=second > 0)
         return self.usable_index[nearest[:, 0]], distance[:, 0], ratio
+
+
+def vertex_points(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The ``vertices`` (n,) as points of the surface: corners (n, 3) (the vertex thrice) and barycentric
+    weights (n, 3) (all on the first)."""
+    weights = np.zeros((len(vertices), 3))
+    weights[:, 0] = 1.0
+    return np.repeat(vertices[:, None], 3, axis=1), weights
 
 
 def barycentric(corners: np.ndarray, points: np.ndarray) -> np.ndarray:
