@@ -274,6 +274,9 @@ def _mlx(args) -> int:
                           f"spacing; set width_spacing to {landmarks['placed_point_spacing']:.4g} (the spacing of "
                           "the placed points) in the script to keep them as without curves.", SymblendWarning)
     steps = apply_filter_script(ms, args.script, _progress_display())
+    for number, step in enumerate(steps, start=1):
+        if "translated" in step:
+            print(f"{args.script}, filter {number}: {step['translated']}", file=sys.stderr)
     _save_atomically(ms, args.output)
     _write_report(args.report, {"script": str(args.script), "landmarks": landmarks, "steps": steps})
     print(f"{args.output}: {len(steps)} filters of {args.script} applied")

@@ -10,7 +10,7 @@ import numpy as np
 import pymeshlab
 import pytest
 
-from filter_symblend import PARAMETERS, synthetic
+from filter_symblend import DISPLAY_NAME, PARAMETERS, synthetic
 from filter_symblend.cli import main
 from conftest import meshlab_mirror_distance
 from filter_symblend.landmarks.files import Landmark, LandmarkSet, read_landmarks, write_landmarks
@@ -408,8 +408,24 @@ def test_mlx_error_writes_nothing(tmp_path, bent_cow_files, capsys):
     bad.write_text('<FilterScript><filter name="Close Hole"/></FilterScript>')
     output = tmp_path / "out.ply"
     assert main(["mlx", str(bad), str(mesh_path), "-o", str(output)]) == 1
-    assert "no MeshLab filter has this name" in capsys.readouterr().err
+    assert "no version of MeshLab had a filter of this name" in capsys.readouterr().err
     assert not output.exists() and list(tmp_path.glob(".*partial*")) == []
+
+
+def test_mlx_runs_a_script_of_meshlab_1_3_and_says_what_it_translated(tmp_path, bent_cow_files, capsys):
+    mesh_path, landmark_path, *_ = bent_cow_files
+    old = tmp_path / "old.mlx"
+    old.write_text('<!DOCTYPE FilterScript>\n<FilterScript>\n <filter name="Remove Duplicated Vertex"/>\n'
+                   f' <filter name="{DISPLAY_NAME}"/>\n</FilterScript>\n')
+    written = old.read_bytes()
+    output, report = tmp_path / "out.ply", tmp_path / "steps.json"
+    assert main(["mlx", str(old), str(mesh_path), "-l", str(landmark_path), "-o", str(output),
+                 "--report", str(report)]) == 0
+    err = capsys.readouterr().err
+    assert (f"{old}, filter 1: 'Remove Duplicated Vertex' (MeshLab 1.3.4BETA) runs as today's "
+            "'Remove Duplicate Vertices'\n") in err
+    assert json.loads(report.read_text())["steps"][0]["translated"].startswith("'Remove Duplicated Vertex'")
+    assert output.exists() and old.read_bytes() == written
 
 
 def test_report_numbers_match_an_independent_computation(tmp_path, bent_cow_files, capsys):

@@ -108,8 +108,8 @@ def _pairs(ms):
 
 
 @pytest.mark.parametrize("filters, message", [
-    (['<filter name="Close Hole"/>'], "no MeshLab filter has this name. The closest MeshLab filter is 'close holes' "
-                                      "(pymeshlab: meshing_close_holes)"),
+    (['<filter name="Close Hole"/>'], "no version of MeshLab had a filter of this name. The closest MeshLab filter "
+                                      "is 'Close Holes' (pymeshlab: meshing_close_holes)"),
     (['<filter name="Symmetrize: Closed-form Blending of Local Symmetry"/>'], f'Did you mean "{DISPLAY_NAME}"'),
     (['<filter name="Close Holes">' + param("RichInt", "MaxHolSize", 3) + "</filter>"],
      "has no parameter `MaxHolSize`. Did you mean `maxholesize`?"),
@@ -123,7 +123,8 @@ def _pairs(ms):
     ([OUR_NODE.format(params=param("RichInt", "phi_width", 3))], "parameter `phi_width` has type RichInt; it must be RichFloat"),
     ([OUR_NODE.format(params=param("RichEnum", "mode", 7))], "parameter `mode` = '7' is not valid"),
     ([OUR_NODE.format(params=param("RichFloat", "alpha", -1))], "`alpha` must be in (0, 100], got -1.0"),
-    (["<notafilter/>"], 'element 2: expected <filter name="...">, got <notafilter>'),
+    (["<notafilter/>"], 'element 2: expected <filter name="..."> (or MeshLab\'s older <xmlfilter name="...">), '
+                        'got <notafilter>'),
 ])
 def test_every_validation_error_names_the_node_and_runs_nothing(tmp_path, holed_cow, filters, message):
     path = script(tmp_path, NATIVE[0], *filters)

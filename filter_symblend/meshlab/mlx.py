@@ -19,6 +19,8 @@ import pymeshlab
 from ..atomic import write_text
 from ..errors import ParameterError, SymblendError
 from ..parameters import PARAMETERS, PARAMETERS_BY_NAME, validate_parameters
+from . import filter_names
+from .filter_names import python_name
 from .meshset_filter import DISPLAY_NAME
 
 
@@ -56,18 +58,23 @@ def read_filter_script(path) -> list[FilterNode]:
                           "<FilterScript>.")
     nodes = []
     for position, element in enumerate(root, start=1):
-        if element.tag != "filter" or "name" not in element.attrib:
-            raise ScriptError(f"{path}, element {position}: expected <filter name=\"...\">, got <{element.tag}>.")
+        if element.tag not in ("filter", "xmlfilter") or "name" not in element.attrib:
+            raise ScriptError(f"{path}, element {position}: expected <filter name=\"...\"> (or MeshLab's "
+                              f"older <xmlfilter name=\"...\">), got <{element.tag}>.")
         node = node_from_element(element, position)
-        if any("name" not in param or "type" not in param for param in node.params):
+        if element.tag == "filter" and any("name" not in p or "type" not in p for p in node.params):
             raise ScriptError(f"{node.where(path)}: every <Param> needs a name and a type.")
+        if element.tag == "xmlfilter" and any("name" not in p or "value" not in p for p in node.params):
+            raise ScriptError(f"{node.where(path)}: every <xmlparam> needs a name and a value.")
         nodes.append(node)
     return nodes
 
 
 def node_from_element(element: ElementTree.Element, position: int) -> FilterNode:
-    """A ``<filter>`` element as a node, its ``<Param>`` attributes kept exactly as written."""
-    return FilterNode(element.attrib["name"], [dict(p.attrib) for p in element if p.tag == "Param"], position)
+    """A ``<filter>`` element as a node, its ``<Param>`` attributes kept exactly as written; an
+    ``<xmlfilter>`` (MeshLab up to 2020.05) likewise, its ``<xmlparam>`` without a type."""
+    tag = "xmlparam" if element.tag == "xmlfilter" else "Param"
+    return FilterNode(element.attrib["name"], [dict(p.attrib) for p in element if p.tag == tag], position)
 
 
 def write_filter_script(nodes: list[FilterNode], path) -> None:
@@ -140,52 +147,38 @@ def symblend_options(node: FilterNode, path) -> dict:
 
 # ---- native nodes ------------------------------------------------------------------------------
 
-# pymeshlab's keyword list, quirk included ("def\tfrom" is one entry: neither gets a "_").
-_PYTHON_KEYWORDS = {"False", "await", "else", "import", "pass", "None", "break", "except", "in", "raise",
-                    "True", "class", "finally", "is", "return", "and", "continue", "for", "lambda", "try",
-                    "as", "def\tfrom", "nonlocal", "while", "assert", "del", "global", "not", "with",
-                    "async", "elif", "if", "or", "yield"}
-
-
-def python_name(name: str) -> str:
-    """pymeshlab's rule turning a MeshLab name into a Python one (its ``computePythonName``)."""
-    out = name.lower().replace(" ", "_").replace("/", "_").replace("-", "_")
-    out = "".join(ch for ch in out if ch not in "().,'\":+")
-    return out + "_" if out in _PYTHON_KEYWORDS else out
-
-
-@functools.lru_cache(maxsize=None)
-def _renamed() -> dict[str, str]:
-    """pymeshlab's table of 2022 renames: Python form of the MeshLab name -> current name."""
-    keys = pathlib.Path(pymeshlab.__file__).with_name("keys.txt")
-    if not keys.is_file():
-        return {}
-    return dict(line.split() for line in keys.read_text().splitlines() if len(line.split()) == 2)
-
-
-def pymeshlab_filter_name(display_name: str) -> str | None:
-    """The pymeshlab filter a MeshLab display name runs, or None if there is none.
-
-    Filters added to MeshLab after pymeshlab's 2022 rename table (e.g. alpha
-    wrap, the newer parametrizations) cannot be resolved from their display
-    name and are reported as unknown.
-    """
-    snake = python_name(display_name)
-    name = _renamed().get(snake, snake)
-    return name if name in pymeshlab.filter_list() else None
+def _old_node_now(node: FilterNode) -> tuple[FilterNode, str | None]:
+    """The node in today's MeshLab terms, and a note saying what was translated (None if nothing)."""
+    rename = filter_names.renamed(node.name)
+    if rename is None:
+        return node, None
+    params = []
+    for param in node.params:
+        change = rename.parameters.get(param["name"])
+        if change:
+            param = dict(param, name=change.get("name", param["name"]), type=change.get("type", param.get("type")),
+                         value=change.get("values", {}).get(str(param.get("value")).lower(), param.get("value")))
+        params.append(param)
+    given = {python_name(p["name"]) for p in params}
+    params += [dict(value, name=name) for name, value in rename.added.items() if python_name(name) not in given]
+    note = f"'{rename.old}' (MeshLab {rename.seen_in}) runs as today's '{rename.now}'"
+    return FilterNode(rename.now, params, node.position), note
 
 
 def unknown_filter_message(node: FilterNode, path) -> str:
-    known = list(_renamed()) + [python_name(DISPLAY_NAME)]
-    close = difflib.get_close_matches(python_name(node.name), known, n=1, cutoff=0.6)
+    gone = filter_names.removed(node.name)
+    if gone is not None:
+        instead = f" Instead: {gone.instead}." if gone.instead else " It has no successor; drop the step."
+        return f"{node.where(path)}: MeshLab removed this filter in {gone.dropped_in}.{instead}"
+    close = filter_names.closest_filter(node.name, {python_name(DISPLAY_NAME): DISPLAY_NAME})
     hint = ""
-    if close and close[0] == python_name(DISPLAY_NAME):
+    if close and close[1] is None:
         hint = f' Did you mean "{DISPLAY_NAME}" (our filter)?'
     elif close:
-        hint = (f" The closest MeshLab filter is '{close[0].replace('_', ' ')}' "
-                f"(pymeshlab: {_renamed()[close[0]]}); write its MeshLab name as it appears in MeshLab's "
-                "Filters menu or in a script saved by MeshLab.")
-    return f"{node.where(path)}: no MeshLab filter has this name.{hint}"
+        shown = f"'{close[0]}' (pymeshlab: {close[1]})" if close[0] else f"pymeshlab's {close[1]}"
+        hint = (f" The closest MeshLab filter is {shown}; write its name as MeshLab's Filters menu "
+                "or a script saved by MeshLab spells it.")
+    return f"{node.where(path)}: no version of MeshLab had a filter of this name.{hint}"
 
 
 @functools.lru_cache(maxsize=None)
@@ -222,22 +215,31 @@ _NATIVE_TYPES = {
 }
 
 
+# The .mlx type an <xmlparam> (which has none) is read as, by the Python type pymeshlab expects.
+_XML_PARAM_TYPES = {bool: "RichBool", int: "RichInt", float: "RichFloat", str: "RichString"}
+
+
 @dataclasses.dataclass
 class NativeCall:
-    """A checked native node: ``ms.apply_filter(filter_name, **values)``; ``mesh_ids`` name the
-    parameters that refer to layers (checked to exist just before the call)."""
+    """A checked native node (as written): ``ms.apply_filter(filter_name, **values)``; ``mesh_ids``
+    name the parameters that refer to layers (checked to exist just before the call); ``note`` says
+    how a filter of an earlier MeshLab was translated (None if it was not)."""
 
     node: FilterNode
     filter_name: str
     values: dict
     mesh_ids: dict[str, int]
+    note: str | None = None
 
 
 def native_call(node: FilterNode, path) -> NativeCall:
-    """Check a native node against pymeshlab's own parameter list and convert its values."""
-    filter_name = pymeshlab_filter_name(node.name)
+    """Check a native node against pymeshlab's own parameter list and convert its values; a filter
+    of an earlier MeshLab runs as the filter it is now, its parameters translated."""
+    written = node
+    node, note = _old_node_now(node)
+    filter_name = filter_names.pymeshlab_filter_name(node.name)
     if filter_name is None:
-        raise ScriptError(unknown_filter_message(node, path))
+        raise ScriptError(unknown_filter_message(written, path))
     expected = native_parameter_types(filter_name)
     values, mesh_ids = {}, {}
     for param in node.params:
@@ -245,23 +247,26 @@ def native_call(node: FilterNode, path) -> NativeCall:
         if name not in expected:
             close = difflib.get_close_matches(name, list(expected), n=1)
             hint = f" Did you mean `{close[0]}`?" if close else ""
-            raise ScriptError(f"{node.where(path)}: the filter has no parameter `{param['name']}`.{hint} "
+            raise ScriptError(f"{written.where(path)}: the filter has no parameter `{param['name']}`.{hint} "
                               f"Its parameters: {', '.join(expected) or 'none'}.")
-        kind = param["type"]
+        kind = param.get("type") or _XML_PARAM_TYPES.get(expected[name])
+        if kind is None:
+            raise ScriptError(f"{written.where(path)}: <xmlparam> `{param['name']}` has no type, and pymeshlab "
+                              f"expects {expected[name].__name__}; write it as a <Param> with its type.")
         if kind not in _NATIVE_TYPES:
-            raise ScriptError(f"{node.where(path)}: parameter `{param['name']}` has type {kind}, which "
+            raise ScriptError(f"{written.where(path)}: parameter `{param['name']}` has type {kind}, which "
                               f"this runner does not support ({', '.join(_NATIVE_TYPES)}).")
         python_type, convert = _NATIVE_TYPES[kind]
         if python_type is not expected[name]:
             raise ScriptError(
-                f"{node.where(path)}: parameter `{param['name']}` is given as {kind} but pymeshlab expects "
+                f"{written.where(path)}: parameter `{param['name']}` is given as {kind} but pymeshlab expects "
                 f"{expected[name].__name__} (a {kind} value would run with garbage); fix its type.")
         try:
             values[name] = convert(param)
         except (KeyError, ValueError):
-            raise ScriptError(f"{node.where(path)}: parameter `{param['name']}` ({kind}) has an invalid "
+            raise ScriptError(f"{written.where(path)}: parameter `{param['name']}` ({kind}) has an invalid "
                               f"value: {param.get('value')!r}.") from None
         if kind == "RichMesh":
             mesh_ids[param["name"]] = values[name]
-    return NativeCall(node, filter_name, values, mesh_ids)
+    return NativeCall(written, filter_name, values, mesh_ids, note)
 

@@ -44,6 +44,9 @@ def _run(ms: pymeshlab.MeshSet, plan: list, path, cache: dict, progress) -> list
                 output = ms.apply_filter(step.filter_name, **step.values)
             except pymeshlab.PyMeshLabException as error:
                 raise ScriptError(f"{node.where(path)}: MeshLab failed: {' '.join(str(error).split())}") from None
+            if step.note:
+                results.append({"filter": node.name, "output": output, "translated": step.note})
+                continue
         else:
             node, options = step
             try:
@@ -59,8 +62,10 @@ def apply_filter_script(ms: pymeshlab.MeshSet, path, progress=None) -> list[dict
     node ("{display}") in Python, in order.
 
     Returns one ``{"filter": name, "output": ...}`` per node (what the filter
-    returned: measures, our report). Raises ScriptError naming the node and the
-    problem; the MeshSet is then unchanged.
+    returned: measures, our report), with ``"translated"`` saying how a filter
+    of an earlier MeshLab version was run (renamed, parameters translated).
+    Raises ScriptError naming the node and the problem; the MeshSet is then
+    unchanged.
     """
     plan = _plan(read_filter_script(path), path)
     if ms.mesh_number() == 0:
