@@ -1,9 +1,11 @@
 """Landmark files: round trips for every format, real-world quirks, frames, errors."""
 
+import json
+
 import pytest
 
 from filter_symblend import SymblendWarning
-
+from filter_symblend.landmarks.curves import find_curves
 from filter_symblend.landmarks.files import (FORMATS, Landmark, LandmarkFileError, LandmarkSet, read_landmarks,
                                             write_landmarks)
 
@@ -103,7 +105,7 @@ def test_landmark_editor_pts_with_missing_values(tmp_path):
     ("bad.csv", "a,b,c\n1,2,3\n", r"first row must name the columns name \(or label\), x, y, z"),
     ("bad.fcsv", "# CoordinateSystem = IJK\n", r"coordinate system 'IJK' is not LPS or RAS"),
     ("bad.mrk.json", "{}", r"not a Slicer markups file"),
-    ("bad.txt", "", r"unknown landmark format; use one of .csv, .fcsv, .mrk.json, .nts, .pp, .pts, .tps"),
+    ("bad.txt", "", r"unknown landmark format; use one of .csv, .fcsv, .json, .mrk.json, .nts, .pp, .pts, .tps"),
     ("bad.tps", "LM=2\n1 2\n3 4\nID=a\n", r"line 1: LM= holds 2D landmarks; the filter needs 3D ones \(LM3=\)"),
     ("bad.tps", "LM3=3\n1 2 3\n4 5\n", r"line 3: LM3=3 needs 3 lines of x y z \(landmark 2 has 2 values\)"),
     ("bad.tps", "LM3=three\n", r"line 1: LM3='three' is not a count"),
@@ -234,3 +236,98 @@ def test_an_nts_study_one_specimen_by_label_or_index(tmp_path):
     assert read_landmarks(path, 1).landmarks[1].position == (-1.0, 2.0, 3.0)
 
 
+
+
+# ---- Slicer's files as each version wrote them ------------------------------------------------
+
+SLICER_FCSV = {
+    "3.6": ("# Fiducial List file /data/skull.fcsv\n# version = 2\n# name = skull\n# numPoints = 3\n"
+            "# symbolScale = 5\n# visibility = 1\n# color = 0.4,1,1\n# columns = label,x,y,z,sel,vis\n"
+            "L_porion,-60,10.5,3,1,1\nR_porion,60,10.5,3,1,1\nnasion,0,-80,20,1,1\n"),
+    "4.6": ("# Markups fiducial file version = 4.6\n# CoordinateSystem = 0\n"
+            "# columns = id,x,y,z,ow,ox,oy,oz,vis,sel,lock,label,desc,associatedNodeID\n"
+            "vtkMRMLMarkupsFiducialNode_0,-60,10.5,3,0,0,0,1,1,1,0,L_porion,,vtkMRMLModelNode4\n"
+            "vtkMRMLMarkupsFiducialNode_1,60,10.5,3,0,0,0,1,1,1,0,R_porion,,vtkMRMLModelNode4\n"
+            "vtkMRMLMarkupsFiducialNode_2,0,-80,20,0,0,0,1,1,1,0,nasion,,vtkMRMLModelNode4\n"),
+    "4.11": ("# Markups fiducial file version = 4.11\n# CoordinateSystem = 1\n"
+             "# columns = id,x,y,z,ow,ox,oy,oz,vis,sel,lock,label,desc,associatedNodeID\n"
+             "1,60,-10.5,3,0,0,0,1,1,1,0,L_porion,,\n2,-60,-10.5,3,0,0,0,1,1,1,0,R_porion,,\n"
+             "3,0,80,20,0,0,0,1,1,1,0,nasion,,\n"),
+    "5.0": ("# Markups fiducial file version = 5.0\n# CoordinateSystem = LPS\n"
+            "# columns = id,x,y,z,ow,ox,oy,oz,vis,sel,lock,label,desc,associatedNodeID\n"
+            "1,60,-10.5,3,0,0,0,1,1,1,0,L_porion,,\n2,-60,-10.5,3,0,0,0,1,1,1,0,R_porion,,\n"
+            "3,0,80,20,0,0,0,1,1,1,0,nasion,,\n"),
+    # 5.6: rows carry two fields the header does not name; an unplaced point with empty coordinates
+    "5.6": ("# Markups fiducial file version = 5.6\n# CoordinateSystem = RAS\n"
+            "# columns = id,x,y,z,ow,ox,oy,oz,vis,sel,lock,label,desc,associatedNodeID\n"
+            "1,-60,10.5,3,0,0,0,1,1,1,0,L_porion,,,2,0\n2,60,10.5,3,0,0,0,1,1,1,0,R_porion,,,2,0\n"
+            "3,0,-80,20,0,0,0,1,1,1,0,nasion,,,2,0\n4,,,,0,0,0,1,1,1,0,,,,2,0\n"),
+}
+
+
+@pytest.mark.parametrize("version", SLICER_FCSV)
+def test_an_fcsv_of_every_slicer_version_reads_to_the_same_points(tmp_path, version):
+    path = tmp_path / f"slicer{version}.fcsv"
+    path.write_text(SLICER_FCSV[version])
+    written = path.read_bytes()
+    points, _ = read_landmarks(path).in_frame("LPS")
+    assert points.names()[:3] == ["L_porion", "R_porion", "nasion"]
+    assert [lm.position for lm in points.landmarks[:3]] == [(60.0, -10.5, 3.0), (-60.0, -10.5, 3.0), (0.0, 80.0, 20.0)]
+    assert all(lm.placed for lm in points.landmarks[:3])
+    if version == "5.6":
+        assert points.landmarks[3].name == "F-4" and not points.landmarks[3].placed
+    assert path.read_bytes() == written
+
+
+def test_an_fcsv_row_too_short_for_its_coordinates_is_named(tmp_path):
+    path = tmp_path / "short.fcsv"
+    path.write_text("# CoordinateSystem = LPS\n# columns = id,x,y,z,label\n1,2,3,4,a\n2,5,6\n")
+    with pytest.raises(LandmarkFileError, match=r"short.fcsv, line 4: the row has 3 fields, too few for the x, y, z "
+                                                r"columns \(id, x, y, z\); complete or delete the row"):
+        read_landmarks(path)
+
+
+TWO_MARKUPS = json.dumps({
+    "@schema": "https://raw.githubusercontent.com/slicer/slicer/master/Modules/Loadable/Markups/Resources/Schema/"
+               "markups-schema-v1.0.3.json#",
+    "markups": [
+        {"type": "Fiducial", "name": "skull", "coordinateSystem": "LPS", "controlPoints": [
+            {"id": "1", "label": "skull-1", "position": [60, -10.5, 3], "positionStatus": "defined"},
+            {"id": "2", "label": "skull-2", "position": [-60, -10.5, 3], "positionStatus": "defined"}]},
+        {"type": "Curve", "coordinateSystem": "RAS", "controlPoints": [
+            {"id": "1", "label": "", "position": [0, 1, 2], "positionStatus": "defined"},
+            {"id": "2", "position": [0, 2, 3], "positionStatus": "defined"}]},
+    ]})
+
+
+@pytest.mark.parametrize("name", ["skull.json", "skull.mrk.json", "skull_landmarks.txt"])
+def test_a_markups_json_is_recognised_by_its_content_and_one_markup_chosen(tmp_path, name):
+    path = tmp_path / name
+    path.write_text(TWO_MARKUPS)
+    with pytest.warns(SymblendWarning, match=r"holds 2 markups \(skull, Curve 2\); the first \(skull\) is used. "
+                                             r"Choose one with --specimen"):
+        first = read_landmarks(path)
+    assert first.names() == ["skull-1", "skull-2"] and first.coordinate_system == "LPS"
+    assert read_landmarks(path, specimen="skull").names() == ["skull-1", "skull-2"]
+    curve = read_landmarks(path, specimen=2)
+    assert curve.names() == ["curve-1", "curve-2"] and curve.coordinate_system == "RAS"
+    assert find_curves(curve.names(), midline=True)[0][0].left == [0, 1]
+    with pytest.raises(LandmarkFileError, match=r"no markup 'face'; its markups are skull, Curve 2 \(by name, or by "
+                                                r"index 1..2\)"):
+        read_landmarks(path, specimen="face")
+
+
+def test_specimen_on_a_file_of_one_set_and_json_that_is_not_markups_are_refused(tmp_path):
+    one = tmp_path / "one.fcsv"
+    one.write_text(SLICER_FCSV["5.0"])
+    with pytest.raises(LandmarkFileError, match="--specimen chooses a specimen of a .tps or .nts file, or a markup of "
+                                                "a Slicer markups JSON; this file holds one set of landmarks"):
+        read_landmarks(one, specimen=2)
+    other = tmp_path / "scene.json"
+    other.write_text('{"nodes": []}')
+    with pytest.raises(LandmarkFileError, match=r'scene.json: not a Slicer markups file \(no "markups" list'):
+        read_landmarks(other)
+    broken = tmp_path / "broken.json"
+    broken.write_text('{"markups": [')
+    with pytest.raises(LandmarkFileError, match=r"broken.json: not valid JSON"):
+        read_landmarks(broken)

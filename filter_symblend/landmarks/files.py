@@ -5,6 +5,7 @@
 | .pp         | MeshLab PickPoints (XML)     | active="0"                       | mesh       |
 | .fcsv       | 3D Slicer fiducials          | a *status column != "defined"    | LPS or RAS |
 | .mrk.json   | 3D Slicer / SlicerMorph      | positionStatus != "defined"      | LPS or RAS |
+| .json, any  | (a markups JSON by content)  |                                  |            |
 | .pts        | IDAV Landmark Editor         | a coordinate of 9999             | mesh       |
 | .csv        | spreadsheet: name, x, y, z   | an empty coordinate              | mesh       |
 | .tps        | Rohlf's TPS (LM3= blocks;    | a coordinate NA, -999 or 9999    | mesh       |
@@ -16,10 +17,12 @@ In every format a coordinate written NA, NaN, -999 or 9999 (as morphometric
 software writes a missing landmark) marks the landmark as not placed. A .tps or .nts
 file may hold several specimens: one is chosen by ID or 1-based index
 (default the first, with a warning naming the others); its landmarks are named
-by number, 1..k, so pair tables by number work; SCALE= is applied.
+by number, 1..k, so pair tables by number work; SCALE= is applied. A markups JSON
+may hold several markups: one is chosen the same way (by name or index).
 
 ``coordinate_system`` is "LPS", "RAS" or None (the mesh's own frame). Slicer
-writes "# CoordinateSystem = 0" (RAS) or "= 1" (LPS) in old .fcsv files.
+writes "# CoordinateSystem = 0" (RAS) or "= 1" (LPS) in old .fcsv files, and
+nothing in Slicer 3's (RAS).
 """
 
 from __future__ import annotations
@@ -118,11 +121,19 @@ def _write_pp(landmarks: LandmarkSet) -> str:
     return "<!DOCTYPE PickedPoints>\n" + ElementTree.tostring(root, encoding="unicode") + "\n"
 
 
+SLICER4_COLUMNS = ["id", "x", "y", "z", "ow", "ox", "oy", "oz", "vis", "sel", "lock", "label", "desc",
+                   "associatednodeid"]  # an .fcsv without a columns header (Slicer 4.0-4.10)
+
+
 def _read_fcsv(text: str, path: str) -> LandmarkSet:
+    """Slicer's fiducial CSV of any version: Slicer 3's ``label,x,y,z,sel,vis``, Slicer 4's 14 columns
+    (with or without the header), Slicer 5's rows with more fields than the header (the extra ones are
+    ignored); the frame from ``# CoordinateSystem`` (0/RAS, 1/LPS; RAS when absent: only Slicer 3 and
+    early Slicer 4 leave it out, and both wrote RAS). A point whose coordinates are empty is not placed."""
     system, columns, landmarks = None, None, []
     rows = list(csv.reader(io.StringIO(text)))
     for number, row in enumerate(rows, start=1):
-        if not row:
+        if not row or not any(cell.strip() for cell in row):
             continue
         if row[0].startswith("#"):
             header = ",".join(row).lstrip("#").strip()
@@ -134,21 +145,25 @@ def _read_fcsv(text: str, path: str) -> LandmarkSet:
                     raise LandmarkFileError(f"{path}, line {number}: coordinate system {value!r} is not "
                                             "LPS or RAS; export the points in LPS or RAS from Slicer.")
             elif key == "columns":
-                columns = [c.strip() for c in value.split(",")]
+                columns = [c.strip().lower() for c in value.split(",")]
                 absent = [axis for axis in "xyz" if axis not in columns]
                 if absent:
                     raise LandmarkFileError(f"{path}, line {number}: the columns header has no "
                                             f"{', '.join(absent)} column; export the markups again from Slicer "
                                             "(3D points need x, y and z).")
             continue
-        names = columns or ["id", "x", "y", "z", "ow", "ox", "oy", "oz", "vis", "sel", "lock", "label"]
-        record = dict(zip(names, row))
+        names = columns or SLICER4_COLUMNS
+        record = dict(zip(names, (cell.strip() for cell in row)))
         where = f"{path}, line {number}"
-        position, placed = _position([record.get(axis) for axis in "xyz"], where)
-        status = next((v for k, v in record.items() if "status" in k.lower()), "defined")
+        if any(axis not in record for axis in "xyz"):
+            raise LandmarkFileError(f"{where}: the row has {len(row)} fields, too few for the x, y, z columns "
+                                    f"({', '.join(names[:names.index('z') + 1])}); complete or delete the row.")
+        texts = [record[axis] for axis in "xyz"]
+        position, placed = ((0.0, 0.0, 0.0), False) if "" in texts else _position(texts, where)
+        status = next((v for k, v in record.items() if "status" in k), "defined")
         landmarks.append(Landmark(record.get("label") or f"F-{len(landmarks) + 1}", position,
-                                  placed and status.strip().lower() in ("", "defined")))
-    return LandmarkSet(landmarks, system or "LPS")
+                                  placed and status.lower() in ("", "defined")))
+    return LandmarkSet(landmarks, system or "RAS")
 
 
 def _write_fcsv(landmarks: LandmarkSet) -> str:
@@ -163,13 +178,33 @@ def _write_fcsv(landmarks: LandmarkSet) -> str:
     return out.getvalue()
 
 
-def _read_mrk_json(text: str, path: str) -> LandmarkSet:
+CURVE_TYPES = ("Curve", "ClosedCurve", "OpenCurve")
+
+
+def _markups(text: str, path: str) -> list[dict]:
+    """The markups of a Slicer markups JSON document; LandmarkFileError if it is not one."""
     try:
         document = json.loads(text)
-        markup = document["markups"][0]
-        points = markup.get("controlPoints", [])
-    except (ValueError, KeyError, IndexError, TypeError):
-        raise LandmarkFileError(f"{path}: not a Slicer markups file (no markups[0].controlPoints).") from None
+    except ValueError as error:
+        raise LandmarkFileError(f"{path}: not valid JSON ({error}).") from None
+    markups = document.get("markups") if isinstance(document, dict) else None
+    if not isinstance(markups, list) or not markups or not all(isinstance(m, dict) for m in markups):
+        raise LandmarkFileError(f"{path}: not a Slicer markups file (no \"markups\" list of point lists); save "
+                                "the points from Slicer's Markups module (.mrk.json).")
+    return markups
+
+
+def _read_mrk_json(text: str, path: str, specimen: str | int | None = None) -> LandmarkSet:
+    """One markup of a Slicer markups JSON (Slicer 4.11 on; any suffix): chosen by ``specimen`` (its
+    name, or a 1-based index) when the file holds several. The points of a curve without labels are
+    named ``<curve>-1``, ``<curve>-2``, ... so that they trace a curve (``--curves``)."""
+    markups = _markups(text, path)
+    shown = [m.get("name") or f"{m.get('type', 'markup')} {i}" for i, m in enumerate(markups, start=1)]
+    markup = markups[_chosen([m.get("name") for m in markups], shown, path, specimen, "markups")]
+    points = markup.get("controlPoints", [])
+    if not isinstance(points, list):
+        raise LandmarkFileError(f"{path}: controlPoints of markup {shown[markups.index(markup)]!r} is not a list.")
+    curve = markup.get("type") in CURVE_TYPES
     landmarks = []
     for index, point in enumerate(points, start=1):
         status = point.get("positionStatus", "defined")
@@ -177,7 +212,8 @@ def _read_mrk_json(text: str, path: str) -> LandmarkSet:
         position = point.get("position") or [0.0, 0.0, 0.0]
         if status == "defined" and len(position) != 3:
             raise LandmarkFileError(f"{where}: position must have 3 coordinates.")
-        landmarks.append(Landmark(point.get("label") or f"F-{index}",
+        default = f"{markup.get('name') or 'curve'}-{index}" if curve else f"F-{index}"
+        landmarks.append(Landmark(point.get("label") or default,
                                   tuple(_number(v, where) for v in position[:3]), status == "defined"))
     return LandmarkSet(landmarks, markup.get("coordinateSystem", "LPS"))
 
@@ -293,25 +329,32 @@ def _tps_specimens(text: str, path: str) -> list[_Specimen]:
     return specimens
 
 
-def _chosen(specimens: list[_Specimen], path: str, specimen: str | int | None) -> _Specimen:
+def _chosen(identifiers: list[str | None], shown: list[str], path: str, specimen: str | int | None,
+            what: str = "specimens") -> int:
+    """The index of the one of ``what`` (a file's specimens, or markups) that ``specimen`` names: an
+    identifier, else a 1-based index; the first, with a warning naming the others, when None."""
+    if specimen is None:
+        if len(identifiers) > 1:
+            warnings.warn(f"{path} holds {len(identifiers)} {what} ({', '.join(shown[:10])}"
+                          f"{', ...' if len(shown) > 10 else ''}); the first ({shown[0]}) is used. Choose one with "
+                          "--specimen ID or INDEX.", SymblendWarning, stacklevel=4)
+        return 0
+    text = str(specimen).strip()
+    if text in identifiers:
+        return identifiers.index(text)
+    if text.isdigit() and 1 <= int(text) <= len(identifiers):
+        return int(text) - 1
+    raise LandmarkFileError(f"{path}: no {what[:-1]} {text!r}; its {what} are {', '.join(shown[:20])} "
+                            f"(by {'name' if what == 'markups' else 'ID'}, or by index 1..{len(identifiers)}).")
+
+
+def _chosen_specimen(specimens: list[_Specimen], path: str, specimen: str | int | None) -> _Specimen:
     if not specimens:
         raise LandmarkFileError(f"{path}: no LM3= block; a TPS file of 3D landmarks starts each specimen with "
                                 "LM3=<count>.")
-    names = [s.identifier or str(i) for i, s in enumerate(specimens, start=1)]
-    if specimen is None:
-        if len(specimens) > 1:
-            warnings.warn(f"{path} holds {len(specimens)} specimens ({', '.join(names[:10])}"
-                          f"{', ...' if len(names) > 10 else ''}); the first ({names[0]}) is used. Choose one with "
-                          "--specimen ID or INDEX.", SymblendWarning, stacklevel=4)
-        return specimens[0]
-    text = str(specimen).strip()
-    for index, candidate in enumerate(specimens, start=1):
-        if candidate.identifier == text:
-            return candidate
-    if text.isdigit() and 1 <= int(text) <= len(specimens):
-        return specimens[int(text) - 1]
-    raise LandmarkFileError(f"{path}: no specimen {text!r}; its specimens are {', '.join(names[:20])} "
-                            f"(by ID, or by index 1..{len(specimens)}).")
+    identifiers = [s.identifier for s in specimens]
+    shown = [s.identifier or str(i) for i, s in enumerate(specimens, start=1)]
+    return specimens[_chosen(identifiers, shown, path, specimen)]
 
 
 def _specimen_landmarks(chosen: _Specimen, where) -> LandmarkSet:
@@ -326,7 +369,7 @@ def _specimen_landmarks(chosen: _Specimen, where) -> LandmarkSet:
 
 def read_tps(text: str, path: str, specimen: str | int | None = None) -> LandmarkSet:
     """One specimen of a TPS file (see the module docstring): landmarks named 1..k, SCALE applied."""
-    chosen = _chosen(_tps_specimens(text, path), path, specimen)
+    chosen = _chosen_specimen(_tps_specimens(text, path), path, specimen)
     return _specimen_landmarks(chosen, lambda index: f"{path}, line {chosen.line + index}")
 
 
@@ -383,7 +426,7 @@ def _nts_specimens(text: str, path: str) -> list[_Specimen]:
 
 def read_nts(text: str, path: str, specimen: str | int | None = None) -> LandmarkSet:
     """One specimen of an NTS file (see :func:`_nts_specimens`): landmarks named 1..k."""
-    chosen = _chosen(_nts_specimens(text, path), path, specimen)
+    chosen = _chosen_specimen(_nts_specimens(text, path), path, specimen)
     return _specimen_landmarks(chosen, lambda index: f"{path}, line {chosen.line}, landmark {index}")
 
 
@@ -397,6 +440,7 @@ FORMATS = {
     ".pp": (_read_pp, _write_pp),
     ".fcsv": (_read_fcsv, _write_fcsv),
     ".mrk.json": (_read_mrk_json, _write_mrk_json),
+    ".json": (_read_mrk_json, _write_mrk_json),
     ".pts": (_read_pts, _write_pts),
     ".csv": (_read_csv, _write_csv),
     ".tps": (read_tps, _write_tps),
@@ -412,19 +456,26 @@ def _format_of(path: pathlib.Path) -> str:
     raise LandmarkFileError(f"{path}: unknown landmark format; use one of {', '.join(sorted(FORMATS))}.")
 
 
+SEVERAL_SETS = (".tps", ".nts", ".mrk.json", ".json")  # formats whose files may hold several sets of landmarks
+
+
 def read_landmarks(path, specimen: str | int | None = None) -> LandmarkSet:
-    """Read a landmark file; the format comes from the suffix (see the module table). ``specimen`` (an ID
-    or a 1-based index) chooses one specimen of a .tps or .nts file."""
+    """Read a landmark file; the format comes from the suffix (see the module table), except that a
+    Slicer markups JSON is recognised by its content whatever its name. ``specimen`` (an ID or name, or
+    a 1-based index) chooses one specimen of a .tps or .nts file, or one markup of a markups JSON."""
     path = pathlib.Path(path)
-    suffix = _format_of(path)
-    if specimen is not None and suffix not in (".tps", ".nts"):
-        raise LandmarkFileError(f"{path}: --specimen chooses a specimen of a .tps or .nts file; this file holds "
-                                "one set of landmarks. Leave it out.")
     try:
         text = path.read_text(encoding="utf-8-sig")
     except OSError as error:
         raise LandmarkFileError(f"{path}: cannot be read ({error.strerror}).") from None
-    if suffix in (".tps", ".nts"):
+    except UnicodeDecodeError:
+        raise LandmarkFileError(f"{path}: not a text file; landmark files are text "
+                                f"({', '.join(sorted(FORMATS))}).") from None
+    suffix = ".json" if text.lstrip().startswith("{") else _format_of(path)
+    if specimen is not None and suffix not in SEVERAL_SETS:
+        raise LandmarkFileError(f"{path}: --specimen chooses a specimen of a .tps or .nts file, or a markup of a "
+                                "Slicer markups JSON; this file holds one set of landmarks. Leave it out.")
+    if suffix in SEVERAL_SETS:
         return FORMATS[suffix][0](text, str(path), specimen)
     return FORMATS[suffix][0](text, str(path))
 
