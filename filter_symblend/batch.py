@@ -29,7 +29,7 @@ ASYMMETRY_FIELDS = ("landmark_asymmetry_before", "landmark_asymmetry_after", "mi
                     "mirror_asymmetry_after")  # report entries whose RMS (relative) the summary shows
 SUMMARY_FIELDS = ("mesh", "status", "seconds", *ASYMMETRY_FIELDS, "output", "error")
 PATH_COLUMNS = ("mesh", "landmarks", "pair_table")
-OUTPUT_OPTIONS = ("output", "report", "overwrite", "help")  # set by the batch, not by a row
+OUTPUT_OPTIONS = ("output", "report", "overwrite", "help", "save_pair_table")  # set by the batch, not by a row
 SCHEDULER_TIMEOUT = 30  # seconds to wait for a Dask scheduler to answer
 TRUE_WORDS = {"1", "true", "yes", "y", "x"}
 FALSE_WORDS = {"", "0", "false", "no", "n"}

@@ -45,13 +45,21 @@ def _add_filter_options(parser: argparse.ArgumentParser) -> None:
         group.add_argument("--" + p.name.replace("_", "-"), **options)
 
 
-def _add_landmark_options(parser: argparse.ArgumentParser, required: bool = True, note: str = "") -> None:
+def _add_landmark_options(parser: argparse.ArgumentParser, required: bool = True, note: str = "",
+                          save_pair_table: bool = True) -> None:
     parser.add_argument("-l", "--landmarks", required=required, type=pathlib.Path,
-                        help="landmark file: .pp, .fcsv, .mrk.json, .pts, .csv, .tps or .nts" + note)
+                        help="landmark file: .pp, .fcsv, .mrk.json (or any markups JSON), .pts, .csv, .tps or .nts"
+                             + note)
     _add_specimen_option(parser)
     parser.add_argument("--pair-table", type=pathlib.Path,
                         help="pair table: two-column CSV of landmark names or 1-based numbers (left, right); "
-                             "default: pair by name (L_/R_ prefixes, _left/_right suffixes, any case)")
+                             "default: pair by name (L_/R_ prefixes, _left/_right suffixes, any case), or by "
+                             "geometry when no name carries a side (numbered landmarks)")
+    if save_pair_table:
+        parser.add_argument("--save-pair-table", type=pathlib.Path, metavar="PAIRS.csv",
+                            help="where pairing by geometry writes the pairs it found, as a pair table to check, "
+                                 "edit and give to --pair-table; default: LANDMARKS.pairs.csv beside the output "
+                                 "(beside the landmark file for landmarks check), never over an existing file")
     parser.add_argument("--side-words", default="l,left,lt/r,right,rt", metavar="LEFT,.../RIGHT,...",
                         help="words that mark the left and the right side in landmark names, as a prefix "
                              "or a suffix (any case, separated by _ - . or a space); default: %(default)s")
@@ -76,8 +84,9 @@ def _add_landmark_options(parser: argparse.ArgumentParser, required: bool = True
 
 def _add_specimen_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--specimen", metavar="ID|INDEX",
-                        help="the specimen of a .tps or .nts file with several (its ID or label, or a 1-based "
-                             "index); default the first, with a warning")
+                        help="the specimen of a .tps or .nts file with several, or the markup of a Slicer markups "
+                             "JSON with several (its ID, label or name, or a 1-based index); default the first, "
+                             "with a warning")
 
 
 def _positive_length(text: str) -> float:
@@ -172,16 +181,47 @@ def _progress_display():
     return _terminal_progress if sys.stderr.isatty() else None
 
 
+def _write_pair_table_for(args, pair_names, midline_names, folder: pathlib.Path) -> pathlib.Path | None:
+    """Write a pair table of ``pair_names`` to --save-pair-table, else to LANDMARKS.pairs.csv in
+    ``folder`` unless a file is there; its path, or None (said on stderr) when not written."""
+    from .landmarks.pairing import write_pair_table
+
+    chosen = getattr(args, "save_pair_table", None)  # a batch row writes beside its output
+    path = chosen or folder / f"{args.landmarks.name.split('.')[0]}.pairs.csv"
+    if chosen is None and path.exists():
+        print(f"pair table not written: {path} exists (choose a file with --save-pair-table)", file=sys.stderr)
+        return None
+    write_pair_table(path, pair_names, midline_names)
+    return path
+
+
+def _geometric_pairing_note(snapped, args, folder: pathlib.Path) -> str | None:
+    """When ``snapped`` was paired by geometry: print the pairing, write it as a pair table
+    (:func:`_write_pair_table_for`) and return the table's path."""
+    if snapped.pairing != "geometry":
+        return None
+    pairs = snapped.pair_names
+    shown = ", ".join(f"{a}-{b}" for a, b in pairs[:30]) + (", ..." if len(pairs) > 30 else "")
+    print(f"{args.landmarks}: no name carries a side; paired by geometry: {len(pairs)} pairs ({shown}); "
+          f"midline: {', '.join(snapped.midline_names) or 'none'}", file=sys.stderr)
+    path = _write_pair_table_for(args, pairs, snapped.midline_names, folder)
+    if path:
+        print(f"pair table: {path} (check or edit it, then use --pair-table {path} --midline)", file=sys.stderr)
+    return str(path) if path else None
+
+
 def _write_landmarks(ms, args, names: dict) -> dict:
     """Snap the landmark file onto the current mesh and store it as the attributes ``names``."""
     from .meshlab.attributes import write_landmark_attributes
 
     snapped = _snapped_pairs(ms, args)
+    table = _geometric_pairing_note(snapped, args, args.output.parent)
     missing = [name.strip() for name in args.missing.split(",") if name.strip()]
     left_weights, right_weights = snapped.weights(missing) if missing else (None, None)
     write_landmark_attributes(ms.current_mesh(), snapped.pairs, left_weights, right_weights, names["pair_attribute"],
                               names["midline_attribute"], names["weight_attribute"])
-    return {"file": str(args.landmarks), "frame": snapped.frame_note, "pairs": [list(p) for p in snapped.pair_names],
+    return {"file": str(args.landmarks), "frame": snapped.frame_note, "pairing": snapped.pairing,
+            "pair_table_written": table, "pairs": [list(p) for p in snapped.pair_names],
             "midline": snapped.midline_names, "curves": snapped.curves,
             "placed_point_spacing": snapped.placed_spacing, "missing": missing,
             "snap_distance_max": float(snapped.snap_distances.max()), "left_out_unplaced": snapped.unplaced,
@@ -219,7 +259,8 @@ def symmetrize_files(args, progress=None):
                             "--pairs landmarks+auto.")
     if not automatic and not args.landmarks:
         raise SymblendError("Give a landmark file (-l LANDMARKS), or --pairs auto to find pairs on the surface.")
-    _check_outputs(args, {"output mesh": args.output, "report": args.report}, [args.input, args.landmarks])
+    outputs = {"output mesh": args.output, "report": args.report, "pair table": getattr(args, "save_pair_table", None)}
+    _check_outputs(args, outputs, [args.input, args.landmarks])
     ms = _load_mesh(args.input)
     landmarks = None if automatic else _write_landmarks(ms, args, params)
     if landmarks and landmarks["curves"] and not params["width_spacing"]:
@@ -257,7 +298,7 @@ def _mlx(args) -> int:
     from .meshlab.mlx import read_filter_script, symblend_options
     from .meshlab.script_runner import apply_filter_script
 
-    _check_outputs(args, {"output mesh": args.output, "report": args.report},
+    _check_outputs(args, {"output mesh": args.output, "report": args.report, "pair table": args.save_pair_table},
                    [args.input, args.script, args.landmarks])
     ours = [symblend_options(node, args.script) for node in read_filter_script(args.script) if node.is_symblend]
     needs_landmarks = [options for options in ours if options["pairs"] != "auto"]
@@ -336,9 +377,20 @@ def _report(args) -> int:
 def _check(args) -> int:
     from .core.landmark_pairs import check_pairs
 
+    from .landmarks.from_file import AmbiguousPairingError
+
+    _check_outputs(args, {"pair table": args.save_pair_table}, [args.input, args.landmarks])
     ms = _load_mesh(args.input)
-    snapped = _snapped_pairs(ms, args)
-    print(f"{args.landmarks}: {snapped.frame_note}; {len(snapped.pair_names)} pairs, "
+    try:
+        snapped = _snapped_pairs(ms, args)
+    except AmbiguousPairingError as error:
+        path = _write_pair_table_for(args, error.pair_names, error.midline_names, args.landmarks.parent)
+        if path is None:
+            raise
+        raise SymblendError(f"{error.problem} The {len(error.pair_names)} pairs found are in {path}: add the "
+                            f"ambiguous ones, then use --pair-table {path} --midline.") from None
+    _geometric_pairing_note(snapped, args, args.landmarks.parent)
+    print(f"{args.landmarks}: {snapped.frame_note}; paired by {snapped.pairing}: {len(snapped.pair_names)} pairs, "
           f"{len(snapped.midline_names)} midline")
     for k, ((left, right), distance) in enumerate(zip(snapped.pair_names, snapped.snap_distances), start=1):
         print(f"  {k:3d}  {left} -> vertex {snapped.pairs.left[k - 1]} (snap {distance[0]:.3g})   "
@@ -425,7 +477,8 @@ def build_parser() -> argparse.ArgumentParser:
     batch.add_argument("--scheduler", metavar="ADDRESS",
                        help="run on the Dask cluster at ADDRESS (tcp://host:8786); needs filter-symblend[cluster]")
     batch.add_argument("--force", action="store_true", help="redo rows whose outputs are newer than their inputs")
-    _add_landmark_options(batch, required=False, note=" (default for rows without a landmarks column)")
+    _add_landmark_options(batch, required=False, note=" (default for rows without a landmarks column)",
+                          save_pair_table=False)
     _add_missing_option(batch)
     _add_filter_options(batch)
     batch.set_defaults(handler=_batch, parser=batch)

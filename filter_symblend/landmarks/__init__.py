@@ -1,1 +1,1 @@
-"""Landmark input: file formats, pairing by name or table, snapping to vertices, curves."""
+"""Landmark input: file formats, pairing by name, by a pair table or by geometry, snapping to vertices, curves."""

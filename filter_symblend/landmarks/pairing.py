@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import io
 import pathlib
 import re
 import warnings
@@ -18,6 +19,7 @@ import warnings
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..atomic import write_text
 from ..core.landmark_pairs import LandmarkPairs
 from ..errors import LandmarkError, SymblendWarning
 from .files import LandmarkFileError, LandmarkSet
@@ -89,6 +91,16 @@ def read_pair_table(path, names: list[str]):
     return pairs
 
 
+def write_pair_table(path, pair_names: list[tuple[str, str]], midline_names: list[str]) -> None:
+    """Write ``pair_names`` as a pair table that :func:`read_pair_table` reads (a header, then one
+    ``left,right`` row per pair); the midline landmarks are named in the header's comment column."""
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(["left", "right", f"midline (use --midline): {' '.join(midline_names) or 'none'}"])
+    writer.writerows(pair_names)
+    write_text(path, out.getvalue())
+
+
 def nearest_vertices(points: np.ndarray, positions: np.ndarray, names: list[str], source: str,
                      allow_far: bool = False):
     """Distances and indices (k,) of the vertices of ``points`` (N, 3) nearest to ``positions``
@@ -119,6 +131,7 @@ class SnappedPairs:
     curves: list[dict] = dataclasses.field(default_factory=list)  # what each curve became (curves.py)
     placed_spacing: float | None = None  # with curves: mean nearest spacing of the placed points
     frame_note: str = ""  # how the file's coordinates were converted to the mesh's frame
+    pairing: str = "names"  # how the landmarks were paired: "names", "pair table" or "geometry"
 
     def weights(self, missing: list[str]):
         """(left, right) weights (n,): 0 for the landmarks named in ``missing``, 1 elsewhere."""
