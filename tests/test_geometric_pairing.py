@@ -162,3 +162,15 @@ def test_landmarks_check_prints_the_pairing_and_never_overwrites_a_table(tmp_pat
     chosen = tmp_path / "mine.csv"
     assert main(["landmarks", "check", str(mesh), "-l", str(marks), "--save-pair-table", str(chosen)]) == 0
     assert chosen.read_text().splitlines()[1:] and table.read_text() == "edited by hand\n"
+
+
+def test_a_pair_table_output_in_a_missing_folder_is_refused_before_any_work(tmp_path, numbered, capsys):
+    points, faces, landmarks, _, _ = numbered
+    mesh = _mesh_file(tmp_path, points, faces)
+    marks = tmp_path / "template.csv"
+    write_landmarks(marks, landmarks)
+    target = tmp_path / "absent" / "pairs.csv"
+    assert main(["symmetrize", str(mesh), "-l", str(marks), "-o", str(tmp_path / "out.ply"),
+                 "--save-pair-table", str(target)]) == 1
+    assert f"{target}: the folder {target.parent} does not exist; create it first." in capsys.readouterr().err
+    assert not (tmp_path / "out.ply").exists()

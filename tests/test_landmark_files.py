@@ -331,3 +331,14 @@ def test_specimen_on_a_file_of_one_set_and_json_that_is_not_markups_are_refused(
     broken.write_text('{"markups": [')
     with pytest.raises(LandmarkFileError, match=r"broken.json: not valid JSON"):
         read_landmarks(broken)
+
+
+def test_a_binary_file_and_control_points_that_are_not_a_list_are_refused(tmp_path):
+    binary = tmp_path / "scan.fcsv"
+    binary.write_bytes(b"\xff\xfe\x00\x81binary")
+    with pytest.raises(LandmarkFileError, match=r"scan.fcsv: not a text file; landmark files are text \(.csv, "):
+        read_landmarks(binary)
+    odd = tmp_path / "odd.json"
+    odd.write_text('{"markups": [{"type": "Fiducial", "name": "skull", "controlPoints": {"label": "a"}}]}')
+    with pytest.raises(LandmarkFileError, match=r"odd.json: controlPoints of markup 'skull' is not a list"):
+        read_landmarks(odd)
