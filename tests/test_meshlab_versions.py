@@ -113,6 +113,19 @@ def test_an_unknown_filter_is_refused_with_the_closest_in_meshlabs_spelling(tmp_
                                        f"had a filter of this name. The closest MeshLab filter is {suggested}")
 
 
+def test_todays_form_of_a_filter_whose_parameters_were_renamed_runs_untranslated(tmp_path):
+    today = write_script(tmp_path, '<filter name="Transform: Rotate"><Param name="angle" value="30" '
+                                   'type="RichDynamicFloat"/><Param name="allLayers" value="false" type="RichBool"/>'
+                                   '</filter>', "today.mlx")
+    old = write_script(tmp_path, '<filter name="Transform: Rotate"><Param name="angle" value="30" '
+                                 'type="RichDynamicFloat"/><Param name="ToAll" value="false" type="RichBool"/>'
+                                 '</filter>', "old.mlx")
+    assert "translated" not in apply_filter_script(sphere(), today)[0]
+    assert apply_filter_script(sphere(), old)[0]["translated"] == (
+        "'Transform: Rotate' (MeshLab 1.3.4BETA) runs as today's 'Transform: Rotate', parameters translated: "
+        "ToAll -> allLayers")
+
+
 def test_xml_filter_errors_name_the_parameter(tmp_path):
     no_value = write_script(tmp_path, '<xmlfilter name="Close Holes"><xmlparam name="MaxHoleSize"/></xmlfilter>', "a.mlx")
     with pytest.raises(ScriptError, match=r"filter 1 \('Close Holes'\): every <xmlparam> needs a name and a value"):

@@ -152,17 +152,22 @@ def _old_node_now(node: FilterNode) -> tuple[FilterNode, str | None]:
     rename = filter_names.renamed(node.name)
     if rename is None:
         return node, None
-    params = []
+    params, changed = [], []
     for param in node.params:
         change = rename.parameters.get(param["name"])
         if change:
+            changed.append(f"{param['name']} -> {change.get('name', param['name'])}")
             param = dict(param, name=change.get("name", param["name"]), type=change.get("type", param.get("type")),
                          value=change.get("values", {}).get(str(param.get("value")).lower(), param.get("value")))
         params.append(param)
     given = {python_name(p["name"]) for p in params}
-    params += [dict(value, name=name) for name, value in rename.added.items() if python_name(name) not in given]
+    added = [dict(value, name=name) for name, value in rename.added.items() if python_name(name) not in given]
+    if python_name(rename.old) == python_name(rename.now) and not changed and not added:
+        return node, None  # today's form of a filter whose parameters were renamed
     note = f"'{rename.old}' (MeshLab {rename.seen_in}) runs as today's '{rename.now}'"
-    return FilterNode(rename.now, params, node.position), note
+    if changed:
+        note += f", parameters translated: {', '.join(changed)}"
+    return FilterNode(rename.now, params + added, node.position), note
 
 
 def unknown_filter_message(node: FilterNode, path) -> str:
