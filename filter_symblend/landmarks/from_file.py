@@ -59,9 +59,9 @@ def pairs_from_landmark_file(points: np.ndarray, faces: np.ndarray | None, path:
     Landmarks pair by name (``side_words``: prefixes or suffixes that mark each side, any case), by
     ``pair_table`` (a two-column CSV of names or 1-based numbers), or, when no name pairs and no table
     is given (numbered landmarks), by geometry (:mod:`.geometric_pairing`: mutual mirror partners, the
-    landmarks on the mirror plane as the midline; ambiguous ones are an error naming them); with
-    ``midline`` the unpaired ones are midline landmarks (else an error lists them); with ``curves`` numbered landmarks are curves,
-    resampled about ``curve_spacing`` apart (mesh units; default 1 % of the diagonal). Coordinates in a
+    landmarks on the mirror plane as the midline; ambiguous ones are an :class:`AmbiguousPairingError`
+    naming them); with ``midline`` the unpaired ones are midline landmarks (else an error lists them);
+    with ``curves`` numbered landmarks are curves, resampled about ``curve_spacing`` apart (mesh units; default 1 % of the diagonal). Coordinates in a
     file that states its frame (Slicer: LPS or RAS) are converted to ``mesh_frame``. Every landmark snaps
     to its nearest vertex; one farther than 2 % of the diagonal is an error unless ``allow_far``.
     ``specimen`` (ID or 1-based index) chooses one specimen of a .tps file.
