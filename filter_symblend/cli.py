@@ -286,11 +286,15 @@ def _symmetrize(args) -> int:
                          "of the diagonal; ")
     checks = ""
     if "mirror_asymmetry_before" in report:
-        checks = (f"mirror asymmetry RMS {report['mirror_asymmetry_before']['rms_relative']:.2%} -> "
-                  f"{report['mirror_asymmetry_after']['rms_relative']:.2%}")
+        before, after = report["mirror_asymmetry_before"], report["mirror_asymmetry_after"]
+        checks = ("mirror asymmetry of the diagonal, before -> after: " + ", ".join(
+            f"{label} {before[key + '_relative']:.3%} -> {after[key + '_relative']:.3%}"
+            for label, key in (("median", "p50"), ("p90", "p90"), ("RMS", "rms"))))
     if "hausdorff_input_output" in report:
         checks += f"; two-way Hausdorff input<->output {report['hausdorff_input_output']['max']:.4g}"
     print(f"{args.output}: {pairs}, mode {report['mode']}; {landmark_line}{checks}".rstrip("; "))
+    for message in report.get("warnings", []):
+        print(f"warning: {message}", file=sys.stderr)
     return 0
 
 
@@ -348,30 +352,62 @@ def _batch(args) -> int:
 
 def _report(args) -> int:
     from .checks.comparison import compare_layers
+    from .checks.hausdorff import per_vertex_distances
     from .checks.surface_asymmetry import CHECK_SAMPLES
+    from .checks.verdict import result_warnings
 
-    _check_outputs(args, {"picture": args.png, "JSON report": args.json}, [args.before, args.after])
+    outputs = {"picture": args.png, "JSON report": args.json, "distance mesh": args.distance_ply}
+    _check_outputs(args, outputs, [args.before, args.after])
     ms = _load_mesh(args.before)
     before_id = ms.current_mesh_id()
     after_id = _load_mesh(args.after, ms).current_mesh_id()
     # The picture colours every vertex; the numbers alone need a sample.
-    result = compare_layers(ms, before_id, after_id, args.pair_attribute, None if args.png else CHECK_SAMPLES)
+    result = compare_layers(ms, before_id, after_id, None if args.png else CHECK_SAMPLES)
+    before, after = result["mirror_asymmetry_before"], result["mirror_asymmetry_after"]
     hausdorff = result["hausdorff_before_after"]
-    print(f"{'':24}{'max':>12}{'mean':>12}{'RMS':>12}")
-    print(f"{'Hausdorff before<->after':24}{hausdorff['max']:12.5g}{hausdorff['mean']:12.5g}{hausdorff['rms']:12.5g}")
-    for key, label in (("mirror_asymmetry_before", "mirror asymmetry before"),
-                       ("mirror_asymmetry_after", "mirror asymmetry after")):
-        m = result[key]
-        print(f"{label:24}{m['max']:12.5g}{m['mean']:12.5g}{m['rms']:12.5g}")
+    keys = ("max", "mean", "rms", "p50", "p90", "p99")
+    print(f"{'(mesh units)':24}" + "".join(f"{k:>11}" for k in keys))
+    print(f"{'Hausdorff before<->after':24}" + "".join(f"{hausdorff[k]:11.4g}" for k in keys))
+    for label, measured in (("mirror asymmetry before", before), ("mirror asymmetry after", after)):
+        print(f"{label:24}" + "".join(f"{measured[k]:11.4g}" for k in keys))
+    print(f"{'(% of the diagonal)':24}" + "".join(f"{k:>11}" for k in keys))
+    for label, measured in (("mirror asymmetry before", before), ("mirror asymmetry after", after)):
+        print(f"{label:24}" + "".join(f"{100 * measured[k + '_relative']:11.4g}" for k in keys))
+    diagonal = ms.mesh(before_id).bounding_box().diagonal()
+    result["warnings"] = result_warnings(before, after, hausdorff, diagonal)
+    for message in result["warnings"]:
+        print(f"warning: {message}", file=sys.stderr)
+    if args.per_vertex or args.distance_ply:
+        meshes = [(ms.mesh(i).vertex_matrix(), ms.mesh(i).face_matrix()) for i in (before_id, after_id)]
+        result["hausdorff_per_vertex"] = {"before_to_after": per_vertex_distances(*meshes[0], *meshes[1]),
+                                          "after_to_before": per_vertex_distances(*meshes[1], *meshes[0])}
+    if args.distance_ply:
+        ms.set_current_mesh(after_id)
+        _save_quality_ply(ms, args.distance_ply, result["hausdorff_per_vertex"]["after_to_before"])
+        print(f"distance mesh: {args.distance_ply} (quality: each vertex's distance to the mesh before)")
+    if not args.per_vertex:
+        result.pop("hausdorff_per_vertex", None)
     if args.png:
         from .checks.render import render_comparison
 
         meshes = [dict(result[key], points=ms.mesh(mesh_id).vertex_matrix(), faces=ms.mesh(mesh_id).face_matrix())
                   for key, mesh_id in (("mirror_asymmetry_before", before_id), ("mirror_asymmetry_after", after_id))]
-        render_comparison(args.png, *meshes, titles=(args.before.name, args.after.name))
+        result["png_views"] = render_comparison(args.png, *meshes, titles=(args.before.name, args.after.name))
         print(f"picture: {args.png}")
     _write_report(args.json, result)
     return 0
+
+
+def _save_quality_ply(ms, path: pathlib.Path, quality) -> None:
+    """Save the current mesh of ``ms`` to ``path`` with ``quality`` (N,) as its per-vertex quality."""
+    import numpy as np
+    import pymeshlab
+
+    mesh = ms.current_mesh()
+    copy = pymeshlab.Mesh(mesh.vertex_matrix(), mesh.face_matrix(), v_scalar_array=np.asarray(quality, dtype=float))
+    scratch = pymeshlab.MeshSet()
+    scratch.add_mesh(copy)
+    _save_atomically(scratch, path)
 
 
 def _check(args) -> int:
@@ -500,9 +536,11 @@ def build_parser() -> argparse.ArgumentParser:
     report.add_argument("--png", type=pathlib.Path,
                         help="picture of both meshes coloured by mirror asymmetry (needs matplotlib)")
     report.add_argument("--json", type=pathlib.Path, help="write the numbers as JSON")
-    report.add_argument("--pair-attribute", default=DEFAULTS["pair_attribute"],
-                        help="landmark pairs (PLY property) that start the mirror-plane fit, when present; "
-                             "default: %(default)s")
+    report.add_argument("--per-vertex", action="store_true",
+                        help="add each vertex's Hausdorff distance (before -> after and after -> before) to the JSON")
+    report.add_argument("--distance-ply", type=pathlib.Path, metavar="MESH.ply",
+                        help="write the mesh after with each vertex's distance to the mesh before as its quality "
+                             "(MeshLab colours it with Colorize by vertex Quality)")
     report.set_defaults(handler=_report)
 
     landmarks = commands.add_parser("landmarks", help="check or convert landmark files")

@@ -150,8 +150,9 @@ def test_interrupting_from_progress_leaves_the_meshset_unchanged(bent_cow_meshse
 
 @pytest.mark.parametrize("checks", ["mirror", "full", "none"])
 def test_checks_measure_each_surface_against_its_reflection(bent_cow_meshset, cow, checks):
-    """Mirror asymmetry: every vertex's distance to the surface reflected across the reported plane (the
-    output's: the solve's own plane), against MeshLab's Hausdorff; the Hausdorff only with 'full'."""
+    """Mirror asymmetry: every vertex's distance to the surface reflected across the reported plane (each
+    surface's own, fitted by one rule: the output's lands on the solve's plane), against MeshLab's
+    Hausdorff; the Hausdorff only with 'full'."""
     ms, deformed, left, right = bent_cow_meshset
     report = ms.generate_symmetrized_mesh(mode="affine", checks=checks)
     assert ("hausdorff_input_output" in report) == (checks == "full")
@@ -160,7 +161,11 @@ def test_checks_measure_each_surface_against_its_reflection(bent_cow_meshset, co
         return
     output = ms.current_mesh().vertex_matrix()
     after = report["mirror_asymmetry_after"]
-    assert after["plane_normal"] == report["plane_normal"] and after["plane_offset"] == report["plane_offset"]
+    cosine = abs(np.dot(after["plane_normal"], report["plane_normal"]))
+    assert np.degrees(np.arccos(min(cosine, 1.0))) < 0.5
+    centre = output.mean(axis=0)
+    assert abs(np.dot(after["plane_normal"], centre) - after["plane_offset"]) == pytest.approx(
+        abs(np.dot(report["plane_normal"], centre) - report["plane_offset"]), abs=1e-3 * report["diagonal"])
     for key, points in (("mirror_asymmetry_before", deformed), ("mirror_asymmetry_after", output)):
         assert meshlab_mirror_distance(points, cow.faces, report[key]) == pytest.approx(
             [report[key][k] for k in ("max", "mean", "rms")], rel=2e-3, abs=1e-7)  # MeshLab works in float32

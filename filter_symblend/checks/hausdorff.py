@@ -19,13 +19,23 @@ def two_way_distance(a: np.ndarray, a_faces: np.ndarray, b: np.ndarray, b_faces:
                      samples: int = HAUSDORFF_SAMPLES) -> dict[str, float]:
     """max, mean and RMS of the distance (mesh units) from at most ``samples`` evenly strided vertices of
     each surface ``(points (N, 3), faces (F, 3))`` to the other (max: the larger direction; mean, RMS:
-    their average), and ``samples`` used per surface. A point cloud (no faces) is its points."""
+    their average), its 50th, 90th and 99th percentiles over both directions' samples, and ``samples``
+    used per surface. A point cloud (no faces) is its points."""
     directions = [distances_to_surface(b, b_faces, evenly(a, samples)),
                   distances_to_surface(a, a_faces, evenly(b, samples))]
+    p50, p90, p99 = np.percentile(np.concatenate(directions), [50, 90, 99])
     return {"max": float(max(d.max() for d in directions)),
             "mean": float(np.mean([d.mean() for d in directions])),
             "rms": float(np.mean([np.sqrt(np.mean(d**2)) for d in directions])),
+            "p50": float(p50), "p90": float(p90), "p99": float(p99),
             "samples": int(min(samples, len(a), len(b)))}
+
+
+def per_vertex_distances(a: np.ndarray, a_faces: np.ndarray, b: np.ndarray, b_faces: np.ndarray) -> np.ndarray:
+    """Distance (N,) from every vertex of ``a`` (N, 3) to the surface ``(b, b_faces)``, mesh units: one
+    direction of the Hausdorff distance, per vertex (``a_faces`` unused, for a symmetric call)."""
+    del a_faces
+    return distances_to_surface(b, b_faces, a)
 
 
 def two_way_hausdorff(ms: pymeshlab.MeshSet, a: int, b: int) -> dict[str, float]:

@@ -1,5 +1,9 @@
 """A picture of a before/after check: both meshes, coloured by mirror asymmetry, from three views.
 
+The views are the object's own, decided by the output's mirror plane whatever the file's axes: along
+the plane (left and right side by side), along the plane's normal (one side), and along the shape's
+long axis in the plane (left and right side by side, end on). One colour scale serves both rows.
+
 Needs matplotlib (the ``plot`` extra); everything else in the package works
 without it. Faces are drawn back to front (painter's algorithm) after back-face
 culling, each in the colour of its vertices' mean asymmetry, flat shaded.
@@ -11,7 +15,9 @@ import numpy as np
 
 from ..errors import SymblendError
 
-VIEWS = (("front", 2), ("top", 1), ("side", 0))  # looking along this axis of the plane frame
+# (title, the row of the plane frame the view looks along): rows are the normal, the long in-plane axis,
+# and the in-plane axis across it. Looking along rows 2 and 1 puts the normal across the screen.
+VIEWS = (("along the plane, left | right", 2), ("along the normal, one side", 0), ("along the long axis", 1))
 
 
 def _plane_frame(points: np.ndarray, normal) -> np.ndarray:
@@ -42,12 +48,13 @@ def _draw(axis, points, faces, values, frame, view_axis, norm, colormap):
     axis.axis("off")
 
 
-def render_comparison(path, before: dict, after: dict, titles=("before", "after")) -> None:
+def render_comparison(path, before: dict, after: dict, titles=("before", "after")) -> list[tuple[str, list]]:
     """Write a PNG: a row per mesh, a column per view, one shared colour bar (mesh units). The
-    views look along the axes of the ``after`` mesh's symmetry frame.
+    views look along the axes of the ``after`` mesh's symmetry frame (see the module docstring).
 
-    ``before`` and ``after`` hold ``points`` (N, 3), ``faces`` (F, 3),
-    ``per_vertex`` (N,) asymmetry and ``plane_normal`` (3,).
+    ``before`` and ``after`` hold ``points`` (N, 3), ``faces`` (F, 3), ``per_vertex`` (N,)
+    asymmetry, ``plane_normal`` (3,), and the summary's ``p90_relative`` and ``rms``.
+    Returns each view's title and the unit vector (3,) it looks along, in the meshes' frame.
     """
     try:
         import matplotlib
@@ -60,14 +67,16 @@ def render_comparison(path, before: dict, after: dict, titles=("before", "after"
     top = max(float(before["per_vertex"].max()), float(after["per_vertex"].max()), 1e-12)
     norm = matplotlib.colors.Normalize(0.0, top)
     colormap = matplotlib.colormaps["viridis"]
-    figure, axes = plt.subplots(2, len(VIEWS), figsize=(4 * len(VIEWS), 7.5), constrained_layout=True)
+    figure, axes = plt.subplots(2, len(VIEWS), figsize=(5 * len(VIEWS), 9), constrained_layout=True)
     frame = _plane_frame(after["points"], after["plane_normal"])  # one frame: the same views of both
     for row, (mesh, title) in enumerate(zip((before, after), titles)):
         for column, (view, view_axis) in enumerate(VIEWS):
             _draw(axes[row, column], mesh["points"], mesh["faces"], mesh["per_vertex"], frame, view_axis,
                   norm, colormap)
-            axes[row, column].set_title(f"{title}: {view}  (RMS {mesh['rms']:.3g})" if column == 0 else view)
-    bar = figure.colorbar(matplotlib.cm.ScalarMappable(norm, colormap), ax=axes, shrink=0.8)
+            figures = f"\np90 {mesh['p90_relative']:.3%} of the diagonal, RMS {mesh['rms']:.3g}"
+            axes[row, column].set_title(f"{title}\n{view}" + (figures if column == 0 else ""), fontsize=9, wrap=True)
+    bar = figure.colorbar(matplotlib.cm.ScalarMappable(norm, colormap), ax=axes, shrink=0.6, orientation="horizontal")
     bar.set_label("mirror asymmetry: distance to the reflected surface (mesh units)")
     figure.savefig(path, dpi=100)
     plt.close(figure)
+    return [(view, frame[view_axis].tolist()) for view, view_axis in VIEWS]

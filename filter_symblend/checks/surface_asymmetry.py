@@ -120,18 +120,6 @@ def surface_mirror_planes(points: np.ndarray, initial: MirrorFit | None = None,
     return distinct
 
 
-def mirror_plane_from_pairs(points: np.ndarray, left: np.ndarray, right: np.ndarray) -> MirrorPlane:
-    """The mirror plane of a point set (N, 3) reached by reflection ICP from the plane of its landmark pairs
-    (vertex indices ``left[k]``, ``right[k]``), on SCREEN_SAMPLES evenly strided vertices: a plane to
-    measure asymmetry against, at a small fixed cost whatever the mesh size."""
-    pairs = fit_mirror_plane(points[left], points[right])
-    flat = flat_normal(points)
-    sample = evenly(points, SCREEN_SAMPLES)
-    start = _in_plane(normalize(pairs.normal), flat)
-    normal, offset, _ = _refine_plane(sample, cKDTree(sample), start, float(pairs.offset), flat)
-    return MirrorPlane(normal, float(offset))
-
-
 def promising_normals(points: np.ndarray, normals: np.ndarray, keep: int, flat: np.ndarray | None = None) -> np.ndarray:
     """The ``keep`` rows of ``normals`` (n, 3) whose planes through the centroid reflect a sample of
     ``points`` (N, 3) closest onto itself (trimmed RMS, one nearest-neighbour query for all): cheap
@@ -152,6 +140,48 @@ def promising_normals(points: np.ndarray, normals: np.ndarray, keep: int, flat: 
     return normals[np.argsort(scores)[:keep]]
 
 
+def distance_summary(distances: np.ndarray) -> dict[str, float]:
+    """max, mean, RMS and the 50th, 90th and 99th percentiles of ``distances`` (mesh units)."""
+    p50, p90, p99 = np.percentile(distances, [50, 90, 99])
+    return {"max": float(distances.max()), "mean": float(distances.mean()),
+            "rms": float(np.sqrt(np.mean(distances**2))), "p50": float(p50), "p90": float(p90), "p99": float(p99)}
+
+
+def best_plane_from(points: np.ndarray, starts: list[MirrorPlane]) -> MirrorPlane:
+    """The best mirror plane of ``points`` (N, 3) reached by reflection ICP from each of ``starts``
+    (on SCREEN_SAMPLES vertices; the best refined again on ICP_SAMPLES), as surface_mirror_planes does."""
+    sample = evenly(points, ICP_SAMPLES)
+    coarse = evenly(sample, SCREEN_SAMPLES)
+    flat = flat_normal(points)
+    tree = cKDTree(coarse)
+    ends = [_refine_plane(coarse, tree, _in_plane(normalize(np.asarray(n, dtype=float)), flat), float(d), flat)
+            for n, d in starts]
+    normal, offset, _ = min(ends, key=lambda end: end[2])
+    if len(coarse) < len(sample):
+        normal, offset, _ = _refine_plane(sample, cKDTree(sample), normal, offset, flat)
+    return MirrorPlane(normal, float(offset))
+
+
+def before_and_after(before: tuple[np.ndarray, np.ndarray], after: tuple[np.ndarray, np.ndarray],
+                     samples: int | None = CHECK_SAMPLES) -> tuple[dict, dict]:
+    """The mirror asymmetry (:func:`mirror_asymmetry`) of two surfaces ``(points (N, 3), faces (F, 3))``,
+    each against its own best plane fitted by one rule from the same starts: the distinct planes
+    :func:`surface_mirror_planes` finds on ``before``. The filter's checks, ``symblend symmetrize`` and
+    ``symblend report`` all measure this way, so the same two surfaces give the same figures; both
+    relative to ``before``'s bounding-box diagonal."""
+    starts = surface_mirror_planes(before[0])
+    diagonal = float(np.linalg.norm(np.ptp(before[0], axis=0)))
+    return tuple(asymmetry_from_starts(points, faces, starts, diagonal, samples) for points, faces in (before, after))
+
+
+def asymmetry_from_starts(points: np.ndarray, faces: np.ndarray, starts: list[MirrorPlane], diagonal: float,
+                          samples: int | None = CHECK_SAMPLES) -> dict:
+    """:func:`mirror_asymmetry` against the best plane reached from ``starts`` (:func:`best_plane_from`),
+    relative to ``diagonal``: one side of :func:`before_and_after`, for callers that measure the two at
+    different times."""
+    return mirror_asymmetry(points, faces, plane=best_plane_from(points, starts), samples=samples, diagonal=diagonal)
+
+
 def mirror_distances(points: np.ndarray, faces: np.ndarray, normal, offset: float,
                      queries: np.ndarray | None = None) -> np.ndarray:
     """Distance (Q,) from each query (Q, 3) (default: every vertex) to the surface ``(points (N, 3), faces)``
@@ -162,24 +192,26 @@ def mirror_distances(points: np.ndarray, faces: np.ndarray, normal, offset: floa
 
 
 def mirror_asymmetry(points: np.ndarray, faces: np.ndarray, initial: MirrorFit | None = None,
-                     plane: MirrorPlane | None = None, samples: int | None = None) -> dict:
+                     plane: MirrorPlane | None = None, samples: int | None = None,
+                     diagonal: float | None = None) -> dict:
     """The surface against its own reflection across its fitted plane.
 
     ``plane``: the result of ``fit_surface_mirror_plane(points,
     initial)`` when it is already known, so it is not fitted again. ``samples``: measure
-    at most that many evenly strided vertices (all by default).
+    at most that many evenly strided vertices (all by default). ``diagonal``: the length the
+    ``*_relative`` figures divide by (default the surface's own bounding-box diagonal).
 
-    Returns ``{"max", "mean", "rms"}`` (mesh units), the same relative to the
-    bounding-box diagonal (``*_relative``), the plane (``plane_normal``,
+    Returns ``{"max", "mean", "rms", "p50", "p90", "p99"}`` (mesh units), the
+    same relative to the bounding-box diagonal (``*_relative``), the plane (``plane_normal``,
     ``plane_offset``), ``measured_vertices`` and ``per_vertex`` distances (one per
     measured vertex).
     """
     normal, offset = fit_surface_mirror_plane(points, initial) if plane is None else plane
     queries = points if samples is None else evenly(points, samples)
     distances = mirror_distances(points, faces, normal, offset, queries)
-    diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
-    stats = {"max": float(distances.max()), "mean": float(distances.mean()),
-             "rms": float(np.sqrt(np.mean(distances**2)))}
+    if diagonal is None:
+        diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+    stats = distance_summary(distances)
     return {**stats, **{f"{k}_relative": v / diagonal for k, v in stats.items()},
             "plane_normal": np.asarray(normal, dtype=float).tolist(), "plane_offset": float(offset),
             "measured_vertices": len(queries), "per_vertex": distances}

@@ -22,8 +22,8 @@ import pymeshlab
 
 from . import recording
 from ..checks.hausdorff import two_way_distance
-from ..checks.surface_asymmetry import CHECK_SAMPLES, mirror_asymmetry, mirror_plane_from_pairs
-from ..core.geometry import MirrorPlane
+from ..checks.surface_asymmetry import asymmetry_from_starts, surface_mirror_planes
+from ..checks.verdict import result_warnings
 from ..core.landmark_pairs import check_points
 from ..core.symmetrize import check_landmarks
 from ..errors import MeshSetError, ParameterError, SymblendWarning
@@ -123,15 +123,12 @@ def _fingerprint(mesh: pymeshlab.Mesh, options: dict) -> str:
     return digest.hexdigest()
 
 
-def _mirror_check(points: np.ndarray, faces: np.ndarray, plane: MirrorPlane) -> dict:
-    """Mirror asymmetry of the surface (points (N, 3), faces) across ``plane``, without per-vertex values."""
-    measured = mirror_asymmetry(points, faces, plane=plane, samples=CHECK_SAMPLES)
+def _mirror_check(points: np.ndarray, faces: np.ndarray, starts, diagonal: float) -> dict:
+    """Mirror asymmetry of the surface (points (N, 3), faces) from the planes ``starts`` (a future of the
+    input's distinct planes: one rule for the input and the output), relative to the input's
+    ``diagonal``, without per-vertex values."""
+    measured = asymmetry_from_starts(points, faces, starts.result(), diagonal)
     return {k: v for k, v in measured.items() if k != "per_vertex"}
-
-
-def _landmark_plane_check(points: np.ndarray, faces: np.ndarray, left: np.ndarray, right: np.ndarray) -> dict:
-    """:func:`_mirror_check` of the input against its plane refined from the landmark pairs' plane."""
-    return _mirror_check(points, faces, mirror_plane_from_pairs(points, left, right))
 
 
 def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExecutor):
@@ -141,28 +138,27 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExec
     region = _missing_region(mesh, options["missing_region"], options["weight_attribute"])
     core = {p.name: options[p.name] for p in PARAMETERS if p.layer != "meshset"}
     points, faces = mesh.vertex_matrix(), mesh.face_matrix()
+    diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
     missing, missing_faces = (None, None) if region is None else region
     checks = {}
     if options["pairs"] == "auto":  # the landmark attributes are not read
         result = symmetrize(points, progress=progress, faces=faces, missing=missing, missing_faces=missing_faces,
                             **core)
-        surface = result.report["auto_pairs"]["surface_plane"]  # refined by the pairing already
-        if options["checks"] != "none":
-            checks["mirror_asymmetry_before"] = pool.submit(
-                _mirror_check, points, faces, MirrorPlane(np.array(surface["normal"]), surface["offset"]))
     else:
         names = {name: options[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
         pairs = read_landmark_attributes(mesh, **names)
         if options["checks"] != "none":  # beside the warp, once the pairs pass the warp's own checks
             check_landmarks(check_points(points), pairs.left, pairs.right, pairs.ids, pairs.midline,
                             pairs.left_weights, pairs.right_weights)
-            checks["mirror_asymmetry_before"] = pool.submit(_landmark_plane_check, points, faces, pairs.left,
-                                                            pairs.right)
+            starts = pool.submit(surface_mirror_planes, points)
+            checks["mirror_asymmetry_before"] = pool.submit(_mirror_check, points, faces, starts, diagonal)
         result = symmetrize(points, pairs.left, pairs.right, pairs.ids, pairs.midline, pairs.left_weights,
                             pairs.right_weights, progress, faces, missing=missing, missing_faces=missing_faces, **core)
     if options["checks"] != "none":
-        plane = MirrorPlane(np.array(result.report["plane_normal"]), result.report["plane_offset"])
-        checks["mirror_asymmetry_after"] = pool.submit(_mirror_check, result.points, faces, plane)
+        if "mirror_asymmetry_before" not in checks:  # automatic pairs: measured once the pairing is done
+            starts = pool.submit(surface_mirror_planes, points)
+            checks["mirror_asymmetry_before"] = pool.submit(_mirror_check, points, faces, starts, diagonal)
+        checks["mirror_asymmetry_after"] = pool.submit(_mirror_check, result.points, faces, starts, diagonal)
     if options["checks"] == "full":
         checks["hausdorff_input_output"] = pool.submit(two_way_distance, points, faces, result.points, faces)
     return result, checks
@@ -198,6 +194,11 @@ def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict |
             with recording.recorded_call(ms, options):
                 output_id = _add_output_layer(ms, input_id, result, carried, list(checks.values()))
         result.report.update({name: check.result() for name, check in checks.items()})
+        if "mirror_asymmetry_after" in result.report:
+            result.report["warnings"] = result_warnings(
+                result.report["mirror_asymmetry_before"], result.report["mirror_asymmetry_after"],
+                result.report.get("hausdorff_input_output"), mesh.bounding_box().diagonal(),
+                result.report["pair_count"], options["pairs"] != "landmarks")
         if cache is not None:
             cache[key] = result
     return {**result.report, "input_mesh_id": input_id, "output_mesh_id": output_id}

@@ -1,0 +1,49 @@
+"""What a before/after check says out loud: results worse than their input, or nothing to restore.
+
+These are results, not errors: each is a sentence with its fix, for the report's ``warnings`` list
+and stderr; the exit status stays 0.
+"""
+
+from __future__ import annotations
+
+WORSE_MARGIN = 0.05  # the output's 90th percentile above the input's by more than this fraction: worse
+# An input whose 99th percentile of mirror asymmetry is below this fraction of its diagonal is symmetric
+# to the precision of its coordinates: single-precision CAD exports round at about 6e-8 of their size, and
+# scans are noisier than 1e-3 of theirs.
+ALREADY_SYMMETRIC = 1e-4
+FAR_BEYOND = 3.0  # the mesh moved more than this many times the input's largest asymmetry
+SPARSE_PAIRS = 10  # landmark pairs below which dense automatic pairs are the fix for a worse result
+
+
+def _percent(value: float) -> str:
+    return f"{100 * value:.3g} %"
+
+
+def result_warnings(before: dict, after: dict, hausdorff: dict | None = None, diagonal: float | None = None,
+                    landmark_pairs: int | None = None, automatic: bool = False) -> list[str]:
+    """The warnings a symmetrization deserves. ``before``, ``after``: mirror asymmetry summaries
+    (``p90``, ``p99``, ``max`` and ``*_relative``); ``hausdorff``: the two-way distance between the
+    input and the output (``max``), mesh units, with the input's bounding-box ``diagonal``;
+    ``landmark_pairs``: how many landmark pairs were used, ``automatic``: whether dense automatic
+    pairs were added (to name the fix)."""
+    messages = []
+    if before["p99_relative"] < ALREADY_SYMMETRIC:
+        moved = "" if hausdorff is None or not diagonal else (
+            f"; the output equals the input within {_percent(hausdorff['max'] / diagonal)} of the diagonal")
+        messages.append(f"nothing to restore: the input is already mirror-symmetric within "
+                        f"{_percent(before['p99_relative'])} of its diagonal (99th percentile){moved}.")
+        return messages
+    if after["p90"] > (1 + WORSE_MARGIN) * before["p90"]:
+        if landmark_pairs is not None and landmark_pairs < SPARSE_PAIRS and not automatic:
+            fix = (f"with {landmark_pairs} landmark pairs, add dense pairs from the surface: --pairs landmarks+auto "
+                   "(pairs=\"landmarks+auto\" in Python)")
+        else:
+            fix = "check the landmark pairs (a swapped or misplaced pair?) and the mode"
+        messages.append(f"the output is more asymmetric than the input: 90th percentile "
+                        f"{_percent(before['p90_relative'])} -> {_percent(after['p90_relative'])} of the diagonal; "
+                        f"{fix}.")
+    if hausdorff is not None and hausdorff["max"] > FAR_BEYOND * before["max"]:
+        messages.append(f"the mesh moved up to {hausdorff['max']:.4g} (two-way Hausdorff), {hausdorff['max'] / before['max']:.1f}x "
+                        f"the input's largest mirror asymmetry ({before['max']:.4g}): more than symmetrizing needs; "
+                        "check for a landmark pair far off its place, or a wrong --mesh-frame.")
+    return messages

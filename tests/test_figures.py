@@ -1,0 +1,167 @@
+"""Before/after figures: one measurement in every command, percentiles, warnings said out loud, the
+picture in the object's own frame."""
+
+import json
+
+import numpy as np
+import pymeshlab
+import pytest
+
+from filter_symblend import synthetic
+from filter_symblend.cli import main
+from filter_symblend.landmarks.files import Landmark, LandmarkSet, write_landmarks
+from conftest import meshset_with_pairs
+
+KEYS = ("p50", "p90", "p99", "rms", "max", "mean")
+
+
+def _files(tmp_path, points, faces, left, right, midline=()):
+    mesh = tmp_path / "input.ply"
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(points, faces))
+    ms.save_current_mesh(str(mesh))
+    marks = [Landmark(f"{side}_{k}", tuple(points[v])) for k, (a, b) in enumerate(zip(left, right))
+             for side, v in (("L", a), ("R", b))]
+    marks += [Landmark(f"mid_{k}", tuple(points[v])) for k, v in enumerate(midline)]
+    landmarks = tmp_path / "input.pp"
+    write_landmarks(landmarks, LandmarkSet(marks))
+    return mesh, landmarks
+
+
+def torus():
+    """A CAD-like part, exactly mirror-symmetric, with 40 landmark pairs."""
+    ms = pymeshlab.MeshSet()
+    ms.create_torus(hradius=3, vradius=1, hsubdiv=48, vsubdiv=24)
+    points, faces = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+    offset, partner = synthetic.mirror_partners(points)
+    left, right = synthetic.farthest_point_pairs(points, offset, partner, 40)
+    return points, faces, left, right, []
+
+
+def bent(cow, pairs):
+    left, right = cow.landmarks(pairs)
+    midline = np.flatnonzero(cow.partner == np.arange(len(cow.points)))[::20][:4] if pairs < 10 else []
+    return synthetic.bend(cow.points, 0.8), cow.faces, left, right, midline
+
+
+@pytest.mark.parametrize("case", ["cad", "bent", "sparse"])
+def test_symmetrize_and_report_give_the_same_figures_for_the_same_files(tmp_path, cow, case, capsys):
+    points, faces, left, right, midline = {"cad": lambda: torus(), "bent": lambda: bent(cow, 100),
+                                           "sparse": lambda: bent(cow, 3)}[case]()
+    mesh, landmarks = _files(tmp_path, points, faces, left, right, midline)
+    output, filter_json, report_json = tmp_path / "out.ply", tmp_path / "filter.json", tmp_path / "report.json"
+    extra = ["--midline"] if len(midline) else []
+    assert main(["symmetrize", str(mesh), "-l", str(landmarks), "-o", str(output), "--report", str(filter_json),
+                 *extra]) == 0
+    printed = capsys.readouterr().out
+    assert "mirror asymmetry of the diagonal, before -> after: median " in printed and "p90 " in printed
+    assert main(["report", str(mesh), str(output), "--json", str(report_json)]) == 0
+    by_filter, by_report = json.loads(filter_json.read_text()), json.loads(report_json.read_text())
+    floor = 1e-9 * by_filter["diagonal"]  # an exactly symmetric output: both figures are rounding noise
+    for side in ("mirror_asymmetry_before", "mirror_asymmetry_after"):
+        for key in KEYS:
+            assert by_report[side][key] == pytest.approx(by_filter[side][key], rel=0.1, abs=floor), (side, key)
+            assert by_report[side][key + "_relative"] == pytest.approx(by_report[side][key] / by_filter["diagonal"])
+    # The same verdicts (the filter's name the landmark fix, the report's cannot: it has no landmarks).
+    kinds = [[w.split(":")[0] for w in data["warnings"] if not w.startswith("the mesh moved")]
+             for data in (by_filter, by_report)]
+    assert kinds[0] == kinds[1] == {"cad": ["nothing to restore"]}.get(case, kinds[0])
+
+
+def test_an_input_already_symmetric_says_there_is_nothing_to_restore(tmp_path, capsys):
+    mesh, landmarks = _files(tmp_path, *torus())
+    output = tmp_path / "out.ply"
+    assert main(["symmetrize", str(mesh), "-l", str(landmarks), "-o", str(output), "--checks", "full"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: nothing to restore: the input is already mirror-symmetric within " in err
+    assert "of its diagonal (99th percentile); the output equals the input within " in err
+    assert main(["report", str(mesh), str(output)]) == 0
+    assert "warning: nothing to restore" in capsys.readouterr().err
+
+
+def _misplaced(cow, bend, distance):
+    """The cow bent ``bend`` rad, 3 landmark pairs and 4 midline landmarks, the second pair's right
+    landmark on a vertex ``distance`` (fraction of the diagonal) from its true place."""
+    left, right = cow.landmarks(3)
+    far = np.linalg.norm(cow.points - cow.points[right[1]], axis=1)
+    right[1] = np.argmin(np.abs(far - distance * cow.diagonal))
+    ms = meshset_with_pairs(synthetic.bend(cow.points, bend), cow.faces, left, right)
+    labels = np.zeros(len(cow.points))
+    labels[np.flatnonzero(cow.partner == np.arange(len(cow.points)))[::20][:4]] = 1
+    ms.current_mesh().add_vertex_custom_scalar_attribute(labels, "symblend_midline")
+    return ms
+
+
+def test_a_result_worse_than_its_input_says_so_with_the_fix(cow):
+    report = _misplaced(cow, 0.1, 0.08).generate_symmetrized_mesh(checks="full")
+    before, after = report["mirror_asymmetry_before"], report["mirror_asymmetry_after"]
+    assert after["p90"] > 1.5 * before["p90"]
+    assert report["warnings"] == [
+        f"the output is more asymmetric than the input: 90th percentile {100 * before['p90_relative']:.3g} % -> "
+        f"{100 * after['p90_relative']:.3g} % of the diagonal; with 3 landmark pairs, add dense pairs from the "
+        "surface: --pairs landmarks+auto (pairs=\"landmarks+auto\" in Python)."]
+
+
+def test_a_mesh_moved_far_beyond_its_asymmetry_says_so(cow):
+    report = _misplaced(cow, 0.02, 0.2).generate_symmetrized_mesh(checks="full")
+    moved, largest = report["hausdorff_input_output"]["max"], report["mirror_asymmetry_before"]["max"]
+    assert moved > 3 * largest
+    assert report["warnings"][-1] == (
+        f"the mesh moved up to {moved:.4g} (two-way Hausdorff), {moved / largest:.1f}x the input's largest mirror "
+        f"asymmetry ({largest:.4g}): more than symmetrizing needs; check for a landmark pair far off its place, or a "
+        "wrong --mesh-frame.")
+
+
+def test_a_result_that_got_better_has_no_warning(cow):
+    points, faces, left, right, _ = bent(cow, 100)
+    report = meshset_with_pairs(points, faces, left, right).generate_symmetrized_mesh(checks="full")
+    assert report["mirror_asymmetry_after"]["p90"] < report["mirror_asymmetry_before"]["p90"] / 3
+    assert report["warnings"] == []
+
+
+def test_report_per_vertex_distances_and_the_distance_mesh(tmp_path, cow, capsys):
+    points, faces, left, right, midline = bent(cow, 100)
+    mesh, landmarks = _files(tmp_path, points, faces, left, right)
+    output, numbers, distance = tmp_path / "out.ply", tmp_path / "numbers.json", tmp_path / "distance.ply"
+    assert main(["symmetrize", str(mesh), "-l", str(landmarks), "-o", str(output)]) == 0
+    assert main(["report", str(mesh), str(output), "--json", str(numbers), "--per-vertex",
+                 "--distance-ply", str(distance)]) == 0
+    data = json.loads(numbers.read_text())
+    forward = np.array(data["hausdorff_per_vertex"]["before_to_after"])
+    backward = np.array(data["hausdorff_per_vertex"]["after_to_before"])
+    assert len(forward) == len(backward) == len(points)
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(output))
+    ms.load_new_mesh(str(mesh))
+    found = ms.get_hausdorff_distance(sampledmesh=0, targetmesh=1, samplevert=True, sampleface=False,
+                                      maxdist=pymeshlab.PureValue(cow.diagonal))
+    assert backward.max() == pytest.approx(found["max"], rel=1e-4)  # MeshLab, the other way round
+    assert max(forward.max(), backward.max()) == pytest.approx(data["hausdorff_before_after"]["max"], rel=1e-6)
+    written = pymeshlab.MeshSet()
+    written.load_new_mesh(str(distance))
+    np.testing.assert_allclose(written.current_mesh().vertex_scalar_array(), backward, atol=1e-6)
+
+
+def test_the_picture_looks_along_the_mirror_plane_and_its_normal(tmp_path, cow, capsys):
+    pytest.importorskip("matplotlib")
+    points, faces, left, right, _ = bent(cow, 100)
+    rotation, _ = np.linalg.qr(np.random.default_rng(5).normal(size=(3, 3)))
+    points = points @ rotation.T  # a file whose axes are not the object's
+    mesh, landmarks = _files(tmp_path, points, faces, left, right)
+    output, numbers, picture = tmp_path / "out.ply", tmp_path / "numbers.json", tmp_path / "check.png"
+    assert main(["symmetrize", str(mesh), "-l", str(landmarks), "-o", str(output)]) == 0
+    assert main(["report", str(mesh), str(output), "--json", str(numbers), "--png", str(picture)]) == 0
+    data = json.loads(numbers.read_text())
+    views = dict((title, np.array(direction)) for title, direction in data["png_views"])
+    normal = np.array(data["mirror_asymmetry_after"]["plane_normal"])
+    assert abs(views["along the normal, one side"] @ normal) == pytest.approx(1.0, abs=1e-9)
+    assert abs(views["along the plane, left | right"] @ normal) < 1e-9
+    assert abs(views["along the long axis"] @ normal) < 1e-9
+    # The long axis: the in-plane direction of largest spread of the output, computed here independently.
+    out = pymeshlab.MeshSet()
+    out.load_new_mesh(str(output))
+    centred = out.current_mesh().vertex_matrix() - out.current_mesh().vertex_matrix().mean(axis=0)
+    in_plane = centred - np.outer(centred @ normal, normal)
+    long_axis = np.linalg.svd(in_plane, full_matrices=False)[2][0]
+    assert abs(views["along the long axis"] @ long_axis) == pytest.approx(1.0, abs=1e-3)
+    assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
