@@ -165,20 +165,27 @@ def best_plane_from(points: np.ndarray, starts: list[MirrorPlane]) -> MirrorPlan
 def before_and_after(before: tuple[np.ndarray, np.ndarray], after: tuple[np.ndarray, np.ndarray],
                      samples: int | None = CHECK_SAMPLES) -> tuple[dict, dict]:
     """The mirror asymmetry (:func:`mirror_asymmetry`) of two surfaces ``(points (N, 3), faces (F, 3))``,
-    each against its own best plane fitted by one rule from the same starts: the distinct planes
-    :func:`surface_mirror_planes` finds on ``before``. The filter's checks, ``symblend symmetrize`` and
-    ``symblend report`` all measure this way, so the same two surfaces give the same figures; both
-    relative to ``before``'s bounding-box diagonal."""
+    each against its own best plane fitted by one rule: the distinct planes :func:`surface_mirror_planes`
+    finds on ``before``, the best of them for ``before``, and for ``after`` the best it reaches from
+    them (:func:`best_plane_from`). The filter's checks, ``symblend symmetrize`` and ``symblend report``
+    all measure this way, so the same two surfaces give the same figures; both relative to
+    ``before``'s bounding-box diagonal."""
     starts = surface_mirror_planes(before[0])
     diagonal = float(np.linalg.norm(np.ptp(before[0], axis=0)))
-    return tuple(asymmetry_from_starts(points, faces, starts, diagonal, samples) for points, faces in (before, after))
+    return (input_asymmetry(*before, starts, diagonal, samples), output_asymmetry(*after, starts, diagonal, samples))
 
 
-def asymmetry_from_starts(points: np.ndarray, faces: np.ndarray, starts: list[MirrorPlane], diagonal: float,
-                          samples: int | None = CHECK_SAMPLES) -> dict:
-    """:func:`mirror_asymmetry` against the best plane reached from ``starts`` (:func:`best_plane_from`),
-    relative to ``diagonal``: one side of :func:`before_and_after`, for callers that measure the two at
-    different times."""
+def input_asymmetry(points: np.ndarray, faces: np.ndarray, starts: list[MirrorPlane], diagonal: float,
+                    samples: int | None = CHECK_SAMPLES) -> dict:
+    """The ``before`` side of :func:`before_and_after`: against the best of its own ``starts``
+    (:func:`surface_mirror_planes` of ``points``), relative to ``diagonal``."""
+    return mirror_asymmetry(points, faces, plane=starts[0], samples=samples, diagonal=diagonal)
+
+
+def output_asymmetry(points: np.ndarray, faces: np.ndarray, starts: list[MirrorPlane], diagonal: float,
+                     samples: int | None = CHECK_SAMPLES) -> dict:
+    """The ``after`` side of :func:`before_and_after`: against the best plane reached from the input's
+    ``starts`` (:func:`best_plane_from`), relative to the input's ``diagonal``."""
     return mirror_asymmetry(points, faces, plane=best_plane_from(points, starts), samples=samples, diagonal=diagonal)
 
 

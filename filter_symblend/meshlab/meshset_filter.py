@@ -22,7 +22,7 @@ import pymeshlab
 
 from . import recording
 from ..checks.hausdorff import two_way_distance
-from ..checks.surface_asymmetry import asymmetry_from_starts, surface_mirror_planes
+from ..checks.surface_asymmetry import input_asymmetry, output_asymmetry, surface_mirror_planes
 from ..checks.verdict import result_warnings
 from ..core.landmark_pairs import check_points
 from ..core.symmetrize import check_landmarks
@@ -123,42 +123,47 @@ def _fingerprint(mesh: pymeshlab.Mesh, options: dict) -> str:
     return digest.hexdigest()
 
 
-def _mirror_check(points: np.ndarray, faces: np.ndarray, starts, diagonal: float) -> dict:
-    """Mirror asymmetry of the surface (points (N, 3), faces) from the planes ``starts`` (a future of the
-    input's distinct planes: one rule for the input and the output), relative to the input's
-    ``diagonal``, without per-vertex values."""
-    measured = asymmetry_from_starts(points, faces, starts.result(), diagonal)
+def _mirror_check(side, points: np.ndarray, faces: np.ndarray, starts, diagonal: float) -> dict:
+    """Mirror asymmetry of the surface (points (N, 3), faces) by ``side`` (input_asymmetry or
+    output_asymmetry: one rule for both) from the planes ``starts`` (a future of the input's distinct
+    planes), relative to the input's ``diagonal``, without per-vertex values."""
+    measured = side(points, faces, starts.result(), diagonal)
     return {k: v for k, v in measured.items() if k != "per_vertex"}
 
 
 def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExecutor):
     """(the warp of ``mesh`` with the fill of its missing region, {report key: future} of its checks); no
-    layer added. The checks run in ``pool``: the input's from the start (its plane comes from the landmark
-    pairs, or from the automatic pairing), the output's once the warp is known."""
+    layer added. The checks run in ``pool``: the input's from the start (its own planes, found beside the
+    warp), the output's once the warp is known (from the input's planes: one rule for both)."""
     region = _missing_region(mesh, options["missing_region"], options["weight_attribute"])
     core = {p.name: options[p.name] for p in PARAMETERS if p.layer != "meshset"}
     points, faces = mesh.vertex_matrix(), mesh.face_matrix()
     diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
     missing, missing_faces = (None, None) if region is None else region
-    checks = {}
+    checks, starts = {}, None
+
+    def measure_input():  # beside the warp: the input's planes, then its asymmetry
+        nonlocal starts
+        starts = pool.submit(surface_mirror_planes, points)
+        checks["mirror_asymmetry_before"] = pool.submit(_mirror_check, input_asymmetry, points, faces, starts,
+                                                        diagonal)
     if options["pairs"] == "auto":  # the landmark attributes are not read
+        if options["checks"] != "none":
+            measure_input()
         result = symmetrize(points, progress=progress, faces=faces, missing=missing, missing_faces=missing_faces,
                             **core)
     else:
         names = {name: options[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
         pairs = read_landmark_attributes(mesh, **names)
-        if options["checks"] != "none":  # beside the warp, once the pairs pass the warp's own checks
+        if options["checks"] != "none":  # once the pairs pass the warp's own checks
             check_landmarks(check_points(points), pairs.left, pairs.right, pairs.ids, pairs.midline,
                             pairs.left_weights, pairs.right_weights)
-            starts = pool.submit(surface_mirror_planes, points)
-            checks["mirror_asymmetry_before"] = pool.submit(_mirror_check, points, faces, starts, diagonal)
+            measure_input()
         result = symmetrize(points, pairs.left, pairs.right, pairs.ids, pairs.midline, pairs.left_weights,
                             pairs.right_weights, progress, faces, missing=missing, missing_faces=missing_faces, **core)
     if options["checks"] != "none":
-        if "mirror_asymmetry_before" not in checks:  # automatic pairs: measured once the pairing is done
-            starts = pool.submit(surface_mirror_planes, points)
-            checks["mirror_asymmetry_before"] = pool.submit(_mirror_check, points, faces, starts, diagonal)
-        checks["mirror_asymmetry_after"] = pool.submit(_mirror_check, result.points, faces, starts, diagonal)
+        checks["mirror_asymmetry_after"] = pool.submit(_mirror_check, output_asymmetry, result.points, faces, starts,
+                                                      diagonal)
     if options["checks"] == "full":
         checks["hausdorff_input_output"] = pool.submit(two_way_distance, points, faces, result.points, faces)
     return result, checks
