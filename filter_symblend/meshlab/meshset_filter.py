@@ -22,7 +22,7 @@ import pymeshlab
 
 from . import recording
 from ..checks.hausdorff import two_way_distance
-from ..checks.surface_asymmetry import input_asymmetry, output_asymmetry, surface_mirror_planes
+from ..checks.surface_asymmetry import input_asymmetry, input_planes, output_asymmetry
 from ..checks.verdict import result_warnings
 from ..core.landmark_pairs import check_points
 from ..core.symmetrize import check_landmarks
@@ -144,7 +144,7 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExec
 
     def measure_input():  # beside the warp: the input's planes, then its asymmetry
         nonlocal starts
-        starts = pool.submit(surface_mirror_planes, points)
+        starts = pool.submit(input_planes, points)
         checks["mirror_asymmetry_before"] = pool.submit(_mirror_check, input_asymmetry, points, faces, starts,
                                                         diagonal)
     if options["pairs"] == "auto":  # the landmark attributes are not read
