@@ -174,3 +174,13 @@ def test_a_pair_table_output_in_a_missing_folder_is_refused_before_any_work(tmp_
                  "--save-pair-table", str(target)]) == 1
     assert f"{target}: the folder {target.parent} does not exist; create it first." in capsys.readouterr().err
     assert not (tmp_path / "out.ply").exists()
+
+
+def test_two_landmarks_in_one_place_are_named_ambiguous(tmp_path, numbered):
+    points, faces, landmarks, _, _ = numbered
+    copy = Landmark("skull-98", landmarks.landmarks[0].position)
+    path = tmp_path / "doubled.csv"
+    write_landmarks(path, LandmarkSet(landmarks.landmarks + [copy]))
+    with pytest.raises(LandmarkError) as error:
+        pairs_from_landmark_file(points, faces, path)
+    assert f"'{landmarks.landmarks[0].name}'" in str(error.value) and "'skull-98'" in str(error.value)

@@ -56,7 +56,11 @@ class GeometricPairing:
 
 
 def _median_spacing(positions: np.ndarray) -> float:
-    return float(np.median(cKDTree(positions).query(positions, k=2)[0][:, 1]))
+    """Median distance from a landmark to its nearest other one, coincident landmarks left out (they
+    pair ambiguously whatever the scale: each one's image lands as near the other)."""
+    nearest = cKDTree(positions).query(positions, k=2)[0][:, 1]
+    apart = nearest[nearest > 0]
+    return float(np.median(apart)) if apart.size else 1.0
 
 
 def _candidates(positions: np.ndarray) -> list[tuple[np.ndarray, float]]:
