@@ -20,6 +20,7 @@ import numpy as np
 import pymeshlab
 
 from filter_symblend import synthetic
+from filter_symblend.core.mesh_quantities import farthest_point_order
 from filter_symblend.landmarks.geometric_pairing import pair_by_geometry
 
 SHARED = pathlib.Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -27,20 +28,13 @@ MESHES = {"cow": pathlib.Path(pymeshlab.__file__).parent / "tests" / "sample_mes
           "spot": SHARED / "spot.obj"}
 
 
-def _farthest(points, candidates, count):
-    chosen = [candidates[0]]
-    for _ in range(count - 1):
-        gaps = np.min(np.linalg.norm(points[candidates][:, None] - points[chosen][None], axis=2), axis=1)
-        chosen.append(candidates[np.argmax(gaps)])
-    return np.array(chosen)
-
-
 def _outcome(points, offset, partner, diagonal, pairs, midline, bend, seed):
     rng = np.random.default_rng(seed)
     left, right = synthetic.farthest_point_pairs(points, offset, partner, pairs + seed)
     left, right = left[seed:], right[seed:]
     near_plane = np.flatnonzero(np.abs(points[:, 0] - offset) < 0.002 * diagonal)
-    centre = _farthest(points, rng.permutation(near_plane), midline)
+    candidates = rng.permutation(near_plane)
+    centre = candidates[farthest_point_order(points[candidates], midline, start=0)]
     shape = synthetic.bend(points, bend) if bend else points
     rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
     shape = shape @ rotation.T

@@ -9,19 +9,12 @@ import pytest
 from filter_symblend import LandmarkError, synthetic
 from filter_symblend.cli import main
 from filter_symblend.core.geometry import reflection_across_plane
+from filter_symblend.core.mesh_quantities import farthest_point_order
 from filter_symblend.landmarks.files import Landmark, LandmarkSet, write_landmarks
 from filter_symblend.landmarks.from_file import pairs_from_landmark_file
 from filter_symblend.landmarks.geometric_pairing import pair_by_geometry
 
 PAIRS, MIDLINE = 14, 12
-
-
-def _farthest(points, candidates, count):
-    chosen = [candidates[0]]
-    for _ in range(count - 1):
-        gaps = np.min(np.linalg.norm(points[candidates][:, None] - points[chosen][None], axis=2), axis=1)
-        chosen.append(candidates[np.argmax(gaps)])
-    return np.array(chosen)
 
 
 def _pose(points, seed):
@@ -38,7 +31,8 @@ def numbered(cow):
     pairs as name sets, the true midline names)."""
     points = _pose(cow.points, 3)
     left, right = synthetic.farthest_point_pairs(cow.points, cow.offset, cow.partner, PAIRS)
-    midline = _farthest(cow.points, np.flatnonzero(cow.partner == np.arange(len(cow.points))), MIDLINE)
+    on_plane = np.flatnonzero(cow.partner == np.arange(len(cow.points)))
+    midline = on_plane[farthest_point_order(cow.points[on_plane], MIDLINE, start=0)]
     vertices = np.concatenate([left, right, midline])
     rng = np.random.default_rng(7)
     directions = rng.normal(size=(len(vertices), 3))
