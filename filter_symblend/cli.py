@@ -352,7 +352,7 @@ def _batch(args) -> int:
 
 def _report(args) -> int:
     from .checks.comparison import compare_layers
-    from .checks.hausdorff import per_vertex_distances
+    from .core.mirror_fill import distances_to_surface
     from .checks.surface_asymmetry import CHECK_SAMPLES
     from .checks.verdict import result_warnings
 
@@ -373,20 +373,22 @@ def _report(args) -> int:
     print(f"{'(% of the diagonal)':24}" + "".join(f"{k:>11}" for k in keys))
     for label, measured in (("mirror asymmetry before", before), ("mirror asymmetry after", after)):
         print(f"{label:24}" + "".join(f"{100 * measured[k + '_relative']:11.4g}" for k in keys))
-    diagonal = ms.mesh(before_id).bounding_box().diagonal()
-    result["warnings"] = result_warnings(before, after, hausdorff, diagonal)
+    result["warnings"] = result_warnings(before, after, hausdorff, ms.mesh(before_id).bounding_box().diagonal())
     for message in result["warnings"]:
         print(f"warning: {message}", file=sys.stderr)
-    if args.per_vertex or args.distance_ply:
-        meshes = [(ms.mesh(i).vertex_matrix(), ms.mesh(i).face_matrix()) for i in (before_id, after_id)]
-        result["hausdorff_per_vertex"] = {"before_to_after": per_vertex_distances(*meshes[0], *meshes[1]),
-                                          "after_to_before": per_vertex_distances(*meshes[1], *meshes[0])}
+    before_mesh, after_mesh = ms.mesh(before_id), ms.mesh(after_id)
+    if args.per_vertex or args.distance_ply:  # one direction of the Hausdorff distance, every vertex
+        after_to_before = distances_to_surface(before_mesh.vertex_matrix(), before_mesh.face_matrix(),
+                                               after_mesh.vertex_matrix())
+    if args.per_vertex:
+        result["hausdorff_per_vertex"] = {
+            "before_to_after": distances_to_surface(after_mesh.vertex_matrix(), after_mesh.face_matrix(),
+                                                    before_mesh.vertex_matrix()),
+            "after_to_before": after_to_before}
     if args.distance_ply:
         ms.set_current_mesh(after_id)
-        _save_quality_ply(ms, args.distance_ply, result["hausdorff_per_vertex"]["after_to_before"])
+        _save_quality_ply(ms, args.distance_ply, after_to_before)
         print(f"distance mesh: {args.distance_ply} (quality: each vertex's distance to the mesh before)")
-    if not args.per_vertex:
-        result.pop("hausdorff_per_vertex", None)
     if args.png:
         from .checks.render import render_comparison
 

@@ -31,13 +31,6 @@ def two_way_distance(a: np.ndarray, a_faces: np.ndarray, b: np.ndarray, b_faces:
             "samples": int(min(samples, len(a), len(b)))}
 
 
-def per_vertex_distances(a: np.ndarray, a_faces: np.ndarray, b: np.ndarray, b_faces: np.ndarray) -> np.ndarray:
-    """Distance (N,) from every vertex of ``a`` (N, 3) to the surface ``(b, b_faces)``, mesh units: one
-    direction of the Hausdorff distance, per vertex (``a_faces`` unused, for a symmetric call)."""
-    del a_faces
-    return distances_to_surface(b, b_faces, a)
-
-
 def two_way_hausdorff(ms: pymeshlab.MeshSet, a: int, b: int) -> dict[str, float]:
     """max, mean and RMS of MeshLab's ``get_hausdorff_distance`` in both directions between
     layers ``a`` and ``b``, sampled at the vertices (max: the larger direction; mean, RMS: their average).

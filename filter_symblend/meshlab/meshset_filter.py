@@ -202,7 +202,7 @@ def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict |
         if "mirror_asymmetry_after" in result.report:
             result.report["warnings"] = result_warnings(
                 result.report["mirror_asymmetry_before"], result.report["mirror_asymmetry_after"],
-                result.report.get("hausdorff_input_output"), mesh.bounding_box().diagonal(),
+                result.report.get("hausdorff_input_output"), result.report["diagonal"],
                 result.report["pair_count"], options["pairs"] != "landmarks")
         if cache is not None:
             cache[key] = result
