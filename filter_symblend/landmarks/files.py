@@ -200,10 +200,11 @@ def _read_mrk_json(text: str, path: str, specimen: str | int | None = None) -> L
     named ``<curve>-1``, ``<curve>-2``, ... so that they trace a curve (``--curves``)."""
     markups = _markups(text, path)
     shown = [m.get("name") or f"{m.get('type', 'markup')} {i}" for i, m in enumerate(markups, start=1)]
-    markup = markups[_chosen([m.get("name") for m in markups], shown, path, specimen, "markups")]
+    index = _chosen([m.get("name") for m in markups], shown, path, specimen, "markups")
+    markup = markups[index]
     points = markup.get("controlPoints", [])
     if not isinstance(points, list):
-        raise LandmarkFileError(f"{path}: controlPoints of markup {shown[markups.index(markup)]!r} is not a list.")
+        raise LandmarkFileError(f"{path}: controlPoints of markup {shown[index]!r} is not a list.")
     curve = markup.get("type") in CURVE_TYPES
     landmarks = []
     for index, point in enumerate(points, start=1):

@@ -45,14 +45,12 @@ LEAVE_ONE_OUT = 150  # landmarks up to which each image comes from a map fitted 
 @dataclasses.dataclass(frozen=True)
 class GeometricPairing:
     """Index pairs (first, second), the first on the side ``plane.normal`` points to; midline and
-    ambiguous landmark indices; the mirror plane; ``distances[i]``: how far landmark i's mirror image
-    lands from its partner (itself for the midline), in the landmarks' units."""
+    ambiguous landmark indices; the mirror plane."""
 
     pairs: list[tuple[int, int]]
     midline: list[int]
     ambiguous: list[int]
     plane: MirrorPlane
-    distances: np.ndarray
 
 
 def _median_spacing(positions: np.ndarray) -> float:
@@ -91,14 +89,15 @@ def _surface_misfit(surface: np.ndarray, surface_tree: cKDTree, normal, offset) 
     return float(np.median(surface_tree.query(reflection_across_plane(surface, normal, offset))[0]))
 
 
-def _matching(positions: np.ndarray, tree: cKDTree, images: np.ndarray, tolerance: float):
-    """Mutual nearest mirror partners within ``tolerance`` (i == j: the midline), whether each is
-    clear of the second nearest, and the two nearest landmarks (indices, distances) of every image."""
+def _matching(tree: cKDTree, images: np.ndarray, tolerance: float):
+    """(confident (k,) bool, partner (k,)): each image's nearest landmark of ``tree``, and whether the
+    two are mutual nearest mirror partners within ``tolerance`` (i == j: the midline), each clear of
+    its second nearest (``RATIO``)."""
     distances, nearest = tree.query(images, k=2)
     partner = nearest[:, 0]
-    mutual = (partner[partner] == np.arange(len(positions))) & (distances[:, 0] < tolerance)
+    mutual = (partner[partner] == np.arange(len(images))) & (distances[:, 0] < tolerance)
     clear = distances[:, 0] < RATIO * distances[:, 1]
-    return mutual & clear & clear[partner], nearest, distances
+    return mutual & clear & clear[partner], partner
 
 
 class _MirrorMap:
@@ -147,9 +146,8 @@ def pair_by_geometry(positions: np.ndarray, surface: np.ndarray | None = None) -
         _, normal, offset = max(scored, key=lambda s: (s[0][0], -s[0][1]))
     matched = None
     for _ in range(REFINEMENTS):
-        confident, nearest, _ = _matching(positions, tree, reflection_across_plane(positions, normal, offset),
-                                          tolerance)
-        now = frozenset((min(i, j), max(i, j)) for i, j in zip(np.flatnonzero(confident), nearest[confident, 0]))
+        confident, partner = _matching(tree, reflection_across_plane(positions, normal, offset), tolerance)
+        now = frozenset((min(i, j), max(i, j)) for i, j in zip(np.flatnonzero(confident), partner[confident]))
         if now == matched or not now:
             break
         matched = now
@@ -164,25 +162,24 @@ def pair_by_geometry(positions: np.ndarray, surface: np.ndarray | None = None) -
     unit_tree = cKDTree(units)
     images, matched = reflection_across_plane(units, *plane), None
     for _ in range(REFINEMENTS):
-        confident, nearest, _ = _matching(units, unit_tree, images, MATCH)
-        now = frozenset(zip(np.flatnonzero(confident), nearest[confident, 0]))
+        confident, partner = _matching(unit_tree, images, MATCH)
+        now = frozenset(zip(np.flatnonzero(confident), partner[confident]))
         if now == matched:
             break
         matched = now
-        images = _fitted_map(units, plane, confident, nearest[:, 0])(units)
-    confident, nearest, _ = _matching(units, unit_tree, images, MATCH)
+        images = _fitted_map(units, plane, confident, partner)(units)
+    confident, partner = _matching(unit_tree, images, MATCH)
     if len(units) <= LEAVE_ONE_OUT:
-        images = np.array([_fitted_map(units, plane, confident, nearest[:, 0], i)(units[i:i + 1])[0]
+        images = np.array([_fitted_map(units, plane, confident, partner, i)(units[i:i + 1])[0]
                            for i in range(len(units))])
-        confident, nearest, _ = _matching(units, unit_tree, images, MATCH)
-    distances = np.linalg.norm(images - units[nearest[:, 0]], axis=1) * spacing
+        confident, partner = _matching(unit_tree, images, MATCH)
     pairs, midline, ambiguous = [], [], []
     for i in range(len(positions)):
-        j = int(nearest[i, 0])
+        j = int(partner[i])
         if not confident[i]:
             ambiguous.append(i)
         elif j == i:
             midline.append(i)
         elif i < j:
             pairs.append((i, j) if positions[i] @ normal >= positions[j] @ normal else (j, i))
-    return GeometricPairing(pairs, midline, ambiguous, MirrorPlane(normal, float(offset)), distances)
+    return GeometricPairing(pairs, midline, ambiguous, MirrorPlane(normal, float(offset)))
