@@ -7,7 +7,7 @@ import numpy as np
 import pymeshlab
 
 from ..core.mirror_fill import distances_to_surface
-from .surface_asymmetry import evenly
+from .surface_asymmetry import distance_summary, evenly
 
 # Vertices, evenly strided, sampled on each surface for the two-way distance. Closest points on a
 # centroid KD-tree cost the same whatever the distance; MeshLab's grid slows down on far samples
@@ -23,11 +23,11 @@ def two_way_distance(a: np.ndarray, a_faces: np.ndarray, b: np.ndarray, b_faces:
     used per surface. A point cloud (no faces) is its points."""
     directions = [distances_to_surface(b, b_faces, evenly(a, samples)),
                   distances_to_surface(a, a_faces, evenly(b, samples))]
-    p50, p90, p99 = np.percentile(np.concatenate(directions), [50, 90, 99])
+    pooled = distance_summary(np.concatenate(directions))
     return {"max": float(max(d.max() for d in directions)),
             "mean": float(np.mean([d.mean() for d in directions])),
             "rms": float(np.mean([np.sqrt(np.mean(d**2)) for d in directions])),
-            "p50": float(p50), "p90": float(p90), "p99": float(p99),
+            **{key: pooled[key] for key in ("p50", "p90", "p99")},
             "samples": int(min(samples, len(a), len(b)))}
 
 
