@@ -20,6 +20,7 @@ Seconds are the filter's own stage timings (median of --repeat runs).
                                              # `symblend report`, each in its own process (time, peak RSS)
     python scripts/benchmark.py --batch      # `symblend batch` on 16 specimens of about 30k vertices: 1 and 2
                                              # local workers, and a local Dask cluster
+    python scripts/benchmark_dense.py        # dense pairs: the stages, the warp against the dense spline
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ import numpy as np
 import pymeshlab
 
 from filter_symblend import GeometryError, SymblendError, SymblendWarning, symmetrize, synthetic
-from filter_symblend.core import warp
+from filter_symblend.core import splines, warp
 from filter_symblend.core.baseline import mirror_average
 from filter_symblend.core.global_solve import global_solve
 from filter_symblend.core.local_symmetries import local_symmetries
@@ -206,14 +207,14 @@ def approximation_against_exact(points, faces, count):
     """The approximate warp forced where the exact one can still be computed: how far apart they are."""
     [(_, left, right)] = scan_pairs(points, [count])
     deformed = synthetic.figure_1_deformation(points)
-    limit = warp.EXACT_CENTRES
+    limits = splines.EXACT_CENTRES, splines.ITERATIVE_CENTRES
     try:
-        warp.EXACT_CENTRES = 2 * len(left)
+        splines.EXACT_CENTRES = 2 * len(left)
         exact = symmetrize(deformed, left, right, **SCAN_OPTIONS)
-        warp.EXACT_CENTRES = 2 * len(left) - 1
+        splines.EXACT_CENTRES = splines.ITERATIVE_CENTRES = 2 * len(left) - 1
         approximate = symmetrize(deformed, left, right, **SCAN_OPTIONS)
     finally:
-        warp.EXACT_CENTRES = limit
+        splines.EXACT_CENTRES, splines.ITERATIVE_CENTRES = limits
     edges = np.unique(np.sort(np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
     lengths = [np.linalg.norm(out[edges[:, 0]] - out[edges[:, 1]], axis=1) for out in (exact.points, approximate.points)]
     change = np.abs(lengths[1] - lengths[0]) / lengths[0]

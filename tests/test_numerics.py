@@ -10,7 +10,8 @@ from filter_symblend.core.geometry import MIRROR_X, minimal_rotation, rotation_a
 from filter_symblend.core.global_solve import MINUS_X, global_solve
 from filter_symblend.core.local_symmetries import local_symmetries
 from filter_symblend.core.neighbourhoods import pair_weights
-from filter_symblend.core import warp
+from filter_symblend.core import iterative_warp, splines, warp
+from filter_symblend.errors import SymblendWarning
 
 MODES = ["standard", "affine", "articulated"]
 
@@ -183,20 +184,26 @@ def test_global_solve_reproduces_a_globally_affine_input_exactly():
     np.testing.assert_allclose(np.vstack([r, s]), expected, atol=1e-12)
 
 
-@pytest.mark.parametrize("approximate", [False, True])
-def test_thin_plate_spline_is_exact_at_landmarks_and_reproduces_affine_maps(monkeypatch, approximate):
-    if approximate:
-        monkeypatch.setattr(warp, "EXACT_CENTRES", 50)
+@pytest.mark.parametrize("kind", ["exact", "iterative", "approximate"])
+def test_thin_plate_spline_is_exact_at_landmarks_and_reproduces_affine_maps(monkeypatch, kind):
+    if kind != "exact":
+        monkeypatch.setattr(splines, "EXACT_CENTRES", 50)
+        monkeypatch.setattr(splines, "ITERATIVE_CENTRES", 50 if kind == "approximate" else 10_000)
         monkeypatch.setattr(warp, "SUBSET_CENTRES", 40)
+        monkeypatch.setattr(iterative_warp, "COARSE_CENTRES", 40)
+        monkeypatch.setattr(iterative_warp, "CENTRES_PER_PATCH", 20)
     rng = np.random.default_rng(1)
     source = rng.normal(size=(200, 3))
     displacement = 0.1 * rng.normal(size=source.shape)
-    spline = warp.thin_plate_spline(source, displacement)
-    assert isinstance(spline, warp.ApproximateThinPlateSpline) == approximate
-    np.testing.assert_allclose(spline(source), displacement, atol=1e-10)
+    spline = splines.thin_plate_spline(source, displacement)
+    assert isinstance(spline, warp.ApproximateThinPlateSpline) == (kind == "approximate")
+    assert ("solved iteratively" in spline.description) == (kind == "iterative")
+    scale = np.ptp(source, axis=0).max()
+    np.testing.assert_allclose(spline(source), displacement, atol=1e-10 if kind != "iterative" else
+                               iterative_warp.TOLERANCE * scale)
     a = np.eye(3) + 0.2 * rng.normal(size=(3, 3))
     points = rng.normal(size=(500, 3))
-    affine = warp.thin_plate_spline(source, source @ a.T + 1.5 - source)
+    affine = splines.thin_plate_spline(source, source @ a.T + 1.5 - source)
     np.testing.assert_allclose(points + affine(points), points @ a.T + 1.5, atol=1e-10)
 
 
@@ -218,7 +225,8 @@ def test_the_approximate_spline_stays_close_to_the_exact_one_on_a_smooth_map(mon
     """Many landmarks of a smooth deformation: the approximation (exact spline through a
     farthest-point subset plus local splines of the residual on patches) is exact at every landmark and within
     0.1 % of the displacement of the exact spline everywhere."""
-    monkeypatch.setattr(warp, "EXACT_CENTRES", 500)
+    monkeypatch.setattr(splines, "EXACT_CENTRES", 500)
+    monkeypatch.setattr(splines, "ITERATIVE_CENTRES", 500)
     monkeypatch.setattr(warp, "SUBSET_CENTRES", 300)
     rng = np.random.default_rng(3)
     centres = rng.uniform(-1, 1, size=(1200, 3))
@@ -227,9 +235,9 @@ def test_the_approximate_spline_stays_close_to_the_exact_one_on_a_smooth_map(mon
         return np.column_stack([0.3 * np.sin(2 * x[:, 1]), 0.2 * x[:, 0] * x[:, 2], 0.1 * np.cos(3 * x[:, 0])])
     points = rng.normal(size=(4000, 3))
     points /= np.linalg.norm(points, axis=1, keepdims=True)
-    approximate = warp.thin_plate_spline(centres, bend(centres))
+    approximate = splines.thin_plate_spline(centres, bend(centres))
     exact = warp.ThinPlateSpline(centres, bend(centres))(points)
-    assert isinstance(approximate, warp.ApproximateThinPlateSpline) and approximate.coarse_count == 300
+    assert approximate.description.startswith("thin-plate spline through 300 of the 1200 landmarks")
     np.testing.assert_allclose(approximate(centres), bend(centres), atol=1e-10)
     assert np.abs(approximate(points) - exact).max() < 1e-3 * np.abs(exact).max()  # measured 2.8e-5
 
@@ -269,17 +277,67 @@ def test_a_solve_that_does_not_converge_says_so(monkeypatch):
         global_solve(phi, p + 0.1, q, local, alpha=0.01)
 
 
+def _iterative_against_dense(monkeypatch, centres, values, points):
+    """(iterative spline, largest |iterative - dense| at ``points`` relative to the landmarks' extent), with a
+    coarse level much smaller than the landmarks so that the refinement has work to do."""
+    monkeypatch.setattr(iterative_warp, "COARSE_CENTRES", len(centres) // 8)
+    monkeypatch.setattr(iterative_warp, "CENTRES_PER_PATCH", 50)
+    iterative = iterative_warp.iterative_thin_plate_spline(centres, values)
+    dense = warp.ThinPlateSpline(centres, values)
+    return iterative, np.abs(iterative(points) - dense(points)).max() / np.ptp(centres, axis=0).max()
+
+
+@pytest.mark.parametrize("roughness", [0.0, 1.0])
+def test_the_iterative_spline_is_the_dense_one(monkeypatch, roughness):
+    """Landmarks on a sphere, a smooth map plus (second case) noise as large as the map: the refined spline
+    equals the dense LU's at points all around, to the refinement's tolerance, in several steps."""
+    rng = np.random.default_rng(7)
+    centres = rng.normal(size=(1600, 3))
+    centres /= np.linalg.norm(centres, axis=1, keepdims=True)
+    values = np.column_stack([0.3 * np.sin(2 * centres[:, 1]), 0.2 * centres[:, 0] * centres[:, 2],
+                              0.1 * np.cos(3 * centres[:, 0])]) + roughness * 0.1 * rng.normal(size=centres.shape)
+    points = 1.2 * rng.uniform(-1, 1, size=(3000, 3))
+    iterative, deviation = _iterative_against_dense(monkeypatch, centres, values, points)
+    assert iterative.residual <= iterative_warp.TOLERANCE
+    assert deviation < 10 * iterative_warp.TOLERANCE
+    steps = int(iterative.description.split("(")[1].split(" steps")[0])
+    assert 1 < steps < iterative_warp.MAX_STEPS
+
+
+def test_the_iterative_spline_handles_flat_patches(monkeypatch):
+    """Landmarks on the faces of a cube (every patch inside a face is planar): still the dense spline."""
+    rng = np.random.default_rng(8)
+    centres = rng.uniform(-1, 1, size=(1600, 3))
+    axis = rng.integers(0, 3, size=len(centres))
+    centres[np.arange(len(centres)), axis] = rng.choice([-1.0, 1.0], size=len(centres))
+    values = np.column_stack([np.sin(centres[:, 1]), centres[:, 0] * centres[:, 2], np.cos(centres[:, 0])])
+    iterative, deviation = _iterative_against_dense(monkeypatch, centres, values, rng.uniform(-1, 1, size=(2000, 3)))
+    assert iterative.residual <= iterative_warp.TOLERANCE and deviation < 10 * iterative_warp.TOLERANCE
+
+
+def test_a_refinement_stopped_short_says_so(monkeypatch):
+    monkeypatch.setattr(iterative_warp, "MAX_STEPS", 1)
+    rng = np.random.default_rng(9)
+    centres = rng.normal(size=(800, 3))
+    values = 0.1 * rng.normal(size=centres.shape)
+    monkeypatch.setattr(iterative_warp, "COARSE_CENTRES", 50)
+    with pytest.warns(SymblendWarning, match=r"warp's iterative solve stopped after 1 step at a residual of "
+                                             r"[0-9.e+-]+ of the landmarks' extent"):
+        iterative_warp.iterative_thin_plate_spline(centres, values)
+
+
 def test_the_approximate_spline_handles_flat_patches(monkeypatch):
     """Landmarks on the faces of a cube: every correction patch inside a face is planar, where a
     local spline with an affine part would be singular; the constant part keeps it solvable."""
-    monkeypatch.setattr(warp, "EXACT_CENTRES", 500)
+    monkeypatch.setattr(splines, "EXACT_CENTRES", 500)
+    monkeypatch.setattr(splines, "ITERATIVE_CENTRES", 500)
     monkeypatch.setattr(warp, "SUBSET_CENTRES", 200)
     rng = np.random.default_rng(5)
     centres = rng.uniform(-1, 1, size=(1500, 3))
     axis = rng.integers(0, 3, size=len(centres))
     centres[np.arange(len(centres)), axis] = rng.choice([-1.0, 1.0], size=len(centres))  # onto a face
     values = np.column_stack([np.sin(centres[:, 1]), centres[:, 0] * centres[:, 2], np.cos(centres[:, 0])])
-    approximate = warp.thin_plate_spline(centres, values)
+    approximate = splines.thin_plate_spline(centres, values)
     np.testing.assert_allclose(approximate(centres), values, atol=1e-9)
     points = rng.uniform(-1, 1, size=(2000, 3))
     exact = warp.ThinPlateSpline(centres, values)(points)

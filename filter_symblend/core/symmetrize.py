@@ -17,7 +17,7 @@ from .landmark_asymmetry import fit_mirror_plane
 from .landmark_pairs import LandmarkPairs, check_pairs, midline_labels
 from .local_symmetries import LocalSymmetries, local_symmetries
 from .neighbourhoods import mean_nearest_spacing, pair_weights, require_connected, scaled_weights
-from .warp import ApproximateThinPlateSpline, thin_plate_spline
+from .splines import thin_plate_spline
 
 # A pair's own mirror misfit, in neighbourhood radii, above which it is reported.
 # Measured on the cow and spot: sound pairs stay below 1.2 under bends, compression
@@ -191,9 +191,12 @@ def solve(points: np.ndarray, landmarks: CheckedLandmarks, options: dict, progre
 
     target = solved @ rotation.T + translation
     spline = thin_plate_spline(landmarks, target - landmarks, flat)
-    warped = points + spline(points, None if progress is None else
-                             lambda fraction: progress(50.0 + 50.0 * fraction, f"warping {len(points)} vertices"))
+    warped = points.copy()
     warped[unique] = target
+    others = np.ones(len(points), dtype=bool)  # the landmarks' own values are the targets: not evaluated
+    others[unique] = False
+    warped[others] += spline(points[others], None if progress is None else
+                             lambda fraction: progress(50.0 + 50.0 * fraction, f"warping {len(points)} vertices"))
     if not np.isfinite(warped).all():
         raise GeometryError(
             "The solve gave non-finite coordinates in the warp: its system is singular for these landmarks "
@@ -237,9 +240,7 @@ def solve(points: np.ndarray, landmarks: CheckedLandmarks, options: dict, progre
         "local_fit_residual": {"median": float(np.median(local.residuals)),
                                "max": float(local.residuals.max())},
         "local_stretch": {"min": float(local.stretch.min()), "max": float(local.stretch.max())},
-        "warp": (f"thin-plate spline through {spline.coarse_count} of the {len(landmarks)} landmarks plus local "
-                 "splines of its residual on patches, exact at all" if isinstance(spline, ApproximateThinPlateSpline)
-                 else f"exact thin-plate spline through the {len(landmarks)} landmarks"),
+        "warp": spline.description,
         "seconds": {},
     }
     stages = ["neighbourhoods", "local_transforms", "global_solve", "warp"]

@@ -19,8 +19,8 @@ Expanding |x - c|^2 loses digits for x within NEAR (of the landmarks' extent) of
 a landmark, so those vertices are evaluated again from coordinate differences
 (scipy's cdist).
 
-Above EXACT_CENTRES landmarks the exact spline is out of reach (its dense system
-grows as k^2 in memory and k^3 in time, its evaluation as k per vertex), so
+Beyond the landmarks an iterative solve reaches (core/splines.py), the exact spline is out of
+reach (its evaluation grows as k per vertex, each refinement step as k^2), so
 ``ApproximateThinPlateSpline`` takes over: the exact spline through SUBSET_CENTRES
 landmarks spread by farthest-point sampling, plus what it leaves at all the
 landmarks, interpolated by local splines of the same kernel on overlapping
@@ -40,13 +40,12 @@ from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
 from .mesh_quantities import farthest_point_order
-from .parallel import in_threads
+from .parallel import WORKERS, in_threads
 
 BLOCK_ELEMENTS = 2**17  # distances per evaluation block (1 MB of float64; measured fastest of 2^15..2^22)
-CHUNK_ROWS = 2**14  # vertices per task of the thread pool
+CHUNK_ROWS = 2**14  # vertices per task of the thread pool (fewer when that leaves a core idle)
 NEAR = 1e-4  # vertices closer than this to a landmark (fraction of their extent) are evaluated exactly
 ROUNDING = 64 * np.finfo(float).eps  # keeps expanded squared distances non-negative
-EXACT_CENTRES = 8_000  # the exact spline up to this many landmarks (4,000 pairs)
 SUBSET_CENTRES = 6_000  # landmarks of the approximation's global part (fewer: measured worse)
 CENTRES_PER_PATCH = 100  # one correction patch per this many landmarks (each holds about 500)
 PATCH_REACH = 1.5  # patch radius, in the largest distance from a landmark to its nearest patch centre
@@ -71,10 +70,39 @@ class ThinPlateSpline:
         system[k:, k:] = 0.0
         right = np.zeros((k + terms, values.shape[1]))
         right[:k] = values
-        coefficients = lu_solve(lu_factor(system, overwrite_a=True, check_finite=False), right, check_finite=False)
-        self._weights, self._polynomial = coefficients[:k], coefficients[k:]
+        self._factors = lu_factor(system, overwrite_a=True, check_finite=False)
+        coefficients = lu_solve(self._factors, right, check_finite=False)
+        self._set_coefficients(coefficients[:k], coefficients[k:])
+        self.description = f"exact thin-plate spline through the {k} landmarks"
+
+    @classmethod
+    def from_coefficients(cls, centres: np.ndarray, shift: np.ndarray, scale: float, weights: np.ndarray,
+                          polynomial: np.ndarray, description: str) -> ThinPlateSpline:
+        """The spline sum_i weights_i (-|y - centres_i|) + [1, y] @ polynomial, y = (x - shift) / scale, with
+        ``centres`` (k, 3) already in y; no fit (a caller that solved for the coefficients itself)."""
+        spline = cls.__new__(cls)
+        spline._shift, spline._scale, spline._centres = shift, scale, centres
+        spline._set_coefficients(weights, polynomial)
+        spline.description = description
+        return spline
+
+    def refitted(self, values: np.ndarray) -> ThinPlateSpline:
+        """The spline through ``values`` (k, d) at the same centres, from the factorization kept from the fit."""
+        k = len(self._centres)
+        right = np.zeros((k + len(self._polynomial), values.shape[1]))
+        right[:k] = values
+        coefficients = lu_solve(self._factors, right, check_finite=False)
+        return ThinPlateSpline.from_coefficients(self._centres, self._shift, self._scale, coefficients[:k],
+                                                 coefficients[k:], self.description)
+
+    def kernel_weights(self) -> np.ndarray:
+        """The weights (k, d) of the kernel terms -|x - c_i| in the caller's coordinates."""
+        return self._weights / self._scale
+
+    def _set_coefficients(self, weights: np.ndarray, polynomial: np.ndarray) -> None:
+        self._weights, self._polynomial = weights, polynomial
         squares = np.einsum("ij,ij->i", self._centres, self._centres)
-        self._expanded = np.vstack([-2.0 * self._centres.T, squares, np.ones(k)])  # (5, k)
+        self._expanded = np.vstack([-2.0 * self._centres.T, squares, np.ones(len(self._centres))])  # (5, k)
         self._largest_square = float(squares.max())
 
     def _polynomial_part(self, x: np.ndarray) -> np.ndarray:
@@ -84,7 +112,15 @@ class ThinPlateSpline:
                  parallel: bool = True) -> np.ndarray:
         """The spline's values (m, d) at ``points`` (m, 3); ``progress(fraction)`` after each 5 %.
         ``parallel=False`` for a caller that runs several splines in threads itself."""
-        x = np.ascontiguousarray((points - self._shift) / self._scale)  # same rounding for any layout
+        return self._evaluate(np.ascontiguousarray((points - self._shift) / self._scale), progress, parallel)
+
+    def at_centres(self) -> np.ndarray:
+        """The spline's values (k, d) at its own centres, each centre's own term exactly 0 (the expanded
+        squared distance leaves sqrt(rounding) there)."""
+        return self._evaluate(self._centres, None, True, own_centres=True)
+
+    def _evaluate(self, x: np.ndarray, progress, parallel: bool, own_centres: bool = False) -> np.ndarray:
+        """Values (m, d) at ``x`` (m, 3) in the spline's scaled coordinates; ``own_centres``: x is the centres."""
         out = self._polynomial_part(x)
         augmented = np.empty((len(x), 5))
         augmented[:, :3] = x
@@ -92,25 +128,30 @@ class ThinPlateSpline:
         squares = np.einsum("ij,ij->i", x, x)
         augmented[:, 4] = squares + ROUNDING * (squares + self._largest_square)
         rows = max(1, BLOCK_ELEMENTS // len(self._centres))
+        chunk = int(min(CHUNK_ROWS, max(rows, -(-len(x) // (2 * WORKERS)))))  # two tasks per core at least
 
         def evaluate_chunk(start: int) -> int:
-            end = min(start + CHUNK_ROWS, len(x))
+            end = min(start + chunk, len(x))
             distances = np.empty((rows, len(self._centres)))
             for row in range(start, end, rows):
                 block = augmented[row:min(row + rows, end)]
                 here = np.matmul(block, self._expanded, out=distances[:len(block)])
                 np.sqrt(here, out=here)
+                if own_centres:
+                    here[np.arange(len(block)), row + np.arange(len(block))] = 0.0
                 out[row:row + len(block)] -= here @ self._weights
             return end
 
-        starts = range(0, len(x), CHUNK_ROWS)
+        starts = range(0, len(x), chunk)
         threaded = parallel and len(starts) > 1  # one chunk: no pool to start
         reported = 0.0
         for end in (in_threads(evaluate_chunk, starts) if threaded else map(evaluate_chunk, starts)):
             if progress is not None and (end / len(x) >= reported + 0.05 or end == len(x)):
                 reported = end / len(x)
                 progress(reported)
-        near = np.flatnonzero(cKDTree(self._centres).query(x, distance_upper_bound=NEAR, workers=-1)[0] <= NEAR)
+        nearest = cKDTree(self._centres).query(x, k=2 if own_centres else 1, distance_upper_bound=NEAR,
+                                               workers=-1)[0]
+        near = np.flatnonzero((nearest[:, 1] if own_centres else nearest) <= NEAR)  # another centre that near
         if near.size:
             out[near] = self._polynomial_part(x[near]) - cdist(x[near], self._centres) @ self._weights
         return out
@@ -137,8 +178,9 @@ class ApproximateThinPlateSpline:
 
     def __init__(self, centres: np.ndarray, values: np.ndarray):
         subset = farthest_point_order(centres, SUBSET_CENTRES, start=0)
-        self.coarse_count = len(subset)
         self.coarse = ThinPlateSpline(centres[subset], values[subset])
+        self.description = (f"thin-plate spline through {len(subset)} of the {len(centres)} landmarks plus local "
+                            "splines of its residual on patches, exact at all")
         residual = values - self.coarse(centres)
         residual[subset] = 0.0
         patch_centres = centres[farthest_point_order(centres, max(1, len(centres) // CENTRES_PER_PATCH), start=0)]
@@ -185,21 +227,10 @@ class PlanarThinPlateSpline:
         self._basis = np.linalg.svd(np.eye(3) - np.outer(flat, flat))[0][:, :2]  # (3, 2): the plane's axes
         self._spline = RBFInterpolator((centres - self._origin) @ self._basis, values @ self._basis,
                                        kernel="thin_plate_spline", degree=1)
-        self.coarse_count = len(centres)
+        self.description = f"thin-plate spline of the plane through the {len(centres)} landmarks"
 
     def __call__(self, points: np.ndarray, progress: Callable[[float], None] | None = None) -> np.ndarray:
         out = self._spline((points - self._origin) @ self._basis) @ self._basis.T
         if progress is not None:
             progress(1.0)
         return out
-
-
-def thin_plate_spline(centres: np.ndarray, values: np.ndarray, flat: np.ndarray | None = None):
-    """The spline through ``values`` (k, d) at ``centres`` (k, 3): exact up to EXACT_CENTRES
-    landmarks, ApproximateThinPlateSpline above; in the plane for a flat input (``flat``: its
-    unit normal)."""
-    if flat is not None:
-        return PlanarThinPlateSpline(centres, values, flat)
-    if len(centres) <= EXACT_CENTRES:
-        return ThinPlateSpline(centres, values)
-    return ApproximateThinPlateSpline(centres, values)
