@@ -424,7 +424,8 @@ def mirror_statistics(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
     the surface reflected across its best mirror plane, fitted afresh (an independent measure); for a flat
     mesh, from each vertex of its outline to the reflected outline."""
     from filter_symblend.core.geometry import flat_normal
-    from filter_symblend.checks.surface_asymmetry import fit_surface_mirror_plane, mirror_distances
+    from filter_symblend.checks.surface_asymmetry import mirror_distances
+    from filter_symblend.core.mirror_planes import fit_surface_mirror_plane
     used = _referenced(faces, len(points))
     plane = fit_surface_mirror_plane(points[used])
     if len(faces) and flat_normal(points[used]) is not None:
@@ -492,7 +493,7 @@ def core_seconds(points: np.ndarray, faces: np.ndarray, mode: str) -> float:
     """Seconds of the paper's method with 2,000 landmark pairs (fewer if the mesh has fewer): the vertices'
     approximate mirror partners across the mesh's best plane, spread by a voxel grid."""
     from filter_symblend.core.geometry import reflection_across_plane
-    from filter_symblend.checks.surface_asymmetry import fit_surface_mirror_plane
+    from filter_symblend.core.mirror_planes import fit_surface_mirror_plane
     from scipy.spatial import cKDTree
     used = np.flatnonzero(_referenced(faces, len(points)))
     normal, offset = fit_surface_mirror_plane(points[used])
@@ -621,7 +622,7 @@ def _child(arguments: list[str]) -> tuple[str, float]:
 
 
 # `symblend report` as the console script runs it, then the process's own peak RSS (MB) on the last line.
-REPORT_PROCESS = ("import resource, sys; from filter_symblend.cli import main; code = main(sys.argv[1:]); "
+REPORT_PROCESS = ("import resource, sys; from filter_symblend.commands.main import main; code = main(sys.argv[1:]); "
                   "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024); sys.exit(code)")
 
 
@@ -694,7 +695,7 @@ def _batch_study(folder: pathlib.Path) -> pathlib.Path:
 
 
 # `symblend batch` in a process of its own; its peak RSS and its workers' largest, MB, on the last line.
-BATCH_PROCESS = ("import resource, sys; from filter_symblend.cli import main; code = main(sys.argv[1:]); "
+BATCH_PROCESS = ("import resource, sys; from filter_symblend.commands.main import main; code = main(sys.argv[1:]); "
                  "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "
                  "resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024)")
 

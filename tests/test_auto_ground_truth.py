@@ -14,6 +14,8 @@ from filter_symblend.auto.spectral import intrinsic_mirror, working_mesh
 
 from conftest import symmetric_blob, twins
 
+pytestmark = pytest.mark.auto
+
 
 def _landmarks_alone(deformed, left, right, mode):
     with warnings.catch_warnings():
@@ -79,33 +81,6 @@ def test_the_parts_of_a_body_of_revolution_decide_its_mirror_plane():
     cosine = abs(np.dot(result.report["plane_normal"], rotation @ [0.0, 1.0, 0.0]))
     assert cosine > np.cos(np.radians(0.1))
     assert np.abs(result.points - posed).max() < 1e-6 * diagonal
-
-
-def test_the_automatic_pairs_layer_has_no_import_circle():
-    """Every module of filter_symblend/auto imports only modules below it (read from the sources)."""
-    import ast
-    import pathlib
-    folder = pathlib.Path(__file__).resolve().parents[1] / "filter_symblend" / "auto"
-    imports = {}
-    for path in folder.glob("*.py"):
-        tree = ast.parse(path.read_text())
-        imports[path.stem] = {node.module.split(".")[0] for node in ast.walk(tree)
-                              if isinstance(node, ast.ImportFrom) and node.level == 1 and node.module}
-    done, active = set(), []
-
-    def visit(module):
-        assert module not in active, "import circle: " + " -> ".join(active[active.index(module):] + [module])
-        if module in done or module not in imports:
-            return
-        active.append(module)
-        for imported in imports[module]:
-            visit(imported)
-        active.pop()
-        done.add(module)
-
-    for module in imports:
-        visit(module)
-    assert {"connectivity", "growth", "surface", "graph"} <= set(imports)
 
 
 def test_the_intrinsic_mirror_of_an_exactly_symmetric_mesh_is_its_mirror_in_any_pose():

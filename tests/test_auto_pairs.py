@@ -21,6 +21,8 @@ from filter_symblend.checks.surface_asymmetry import mirror_asymmetry
 
 from conftest import SAMPLE_MESHES, SHARED_DATA, load_ground_truth, meshset_with_pairs, symmetric_blob, twins
 
+pytestmark = pytest.mark.auto  # every test here runs automatic pairs, or tests a part of them
+
 TARGET = 0.2  # the issue's target: at most a fifth of the symmetry error of 100 landmark pairs
 
 
@@ -85,6 +87,7 @@ def test_a_bent_or_bent_and_compressed_cow_beats_100_landmarks_five_times(cow, c
     assert automatic.report["auto_pairs"]["twins_are"] == "exact vertices"
 
 
+@pytest.mark.corpus
 def test_a_strongly_bent_mirrored_tessellation_comes_back_exactly_symmetric():
     """Spot's triangles mirror each other: bent by 1.2 rad, its tessellation's own mirror map pairs every
     vertex with its true twin, where the geometric maps alone do not reach half the surface."""
@@ -271,6 +274,7 @@ SYMMETRIC = {"cow.obj", "spot.obj", "homer.obj", "cheburashka.obj", "woody.obj"}
 NOT_SYMMETRIC = {"stanford-bunny.obj"}
 
 
+@pytest.mark.corpus
 def test_every_corpus_mesh_is_symmetrized_or_refused_as_its_symmetry_says():
     outcomes = {}
     for name, points, faces in _corpus():
@@ -465,6 +469,7 @@ def test_auto_on_a_meshset_ignores_the_landmark_attributes(cow):
     assert report["pair_count"] == 0 and report["auto_pairs"]["stopped"] == "converged"
 
 
+@pytest.mark.corpus
 def test_the_igea_scan_is_made_symmetric_without_moving_more_than_its_asymmetry():
     path = SHARED_DATA / "igea.ply"
     if not path.exists():

@@ -9,8 +9,8 @@ import pymeshlab
 import pytest
 
 from filter_symblend import SymblendError, synthetic
-from filter_symblend.batch import read_manifest, run
-from filter_symblend.cli import main
+from filter_symblend.commands.batch import read_manifest, run
+from filter_symblend.commands.main import main
 from filter_symblend.core.landmark_asymmetry import fit_mirror_plane
 from filter_symblend.landmarks.files import Landmark, LandmarkSet, read_landmarks, write_landmarks
 
@@ -140,7 +140,7 @@ def test_batch_command_errors(tmp_path, capsys, monkeypatch):
 
 
 def test_an_unexpected_failure_of_one_row_is_reported_not_raised(study, monkeypatch):
-    import filter_symblend.batch as batch
+    import filter_symblend.commands.batch as batch
     manifest, folder = study
     [row, *_] = read_manifest(manifest, folder / "unexpected")
 
@@ -153,7 +153,7 @@ def test_an_unexpected_failure_of_one_row_is_reported_not_raised(study, monkeypa
 
 
 def test_more_batch_errors(tmp_path, study, capsys, monkeypatch):
-    import filter_symblend.batch as batch
+    import filter_symblend.commands.batch as batch
     pytest.importorskip("dask.distributed")
     manifest, folder = study
     with pytest.raises(SymblendError, match=r"nothere.csv: cannot be read \(No such file or directory\)"):

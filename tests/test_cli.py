@@ -11,7 +11,7 @@ import pymeshlab
 import pytest
 
 from filter_symblend import DISPLAY_NAME, PARAMETERS, synthetic
-from filter_symblend.cli import main
+from filter_symblend.commands.main import main
 from conftest import meshlab_mirror_distance
 from filter_symblend.landmarks.files import Landmark, LandmarkSet, read_landmarks, write_landmarks
 
@@ -116,7 +116,7 @@ def test_version(capsys):
 def test_real_process(tmp_path, bent_cow_files):
     mesh_path, landmark_path, *_ = bent_cow_files
     output = tmp_path / "out.ply"
-    result = subprocess.run([sys.executable, "-m", "filter_symblend.cli", "symmetrize", str(mesh_path),
+    result = subprocess.run([sys.executable, "-m", "filter_symblend.commands", "symmetrize", str(mesh_path),
                              "-l", str(landmark_path), "-o", str(output)], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
     assert output.exists() and "landmark asymmetry" in result.stdout
@@ -315,7 +315,7 @@ def test_every_mesh_format_listed_is_one_pymeshlab_writes(tmp_path):
     # In a fresh interpreter: a writer's failure then names its format, whatever earlier tests left in
     # this process (a crash inside pymeshlab's writers was seen once in ~10 runs of the whole suite,
     # never in 3,000 writes from a fresh process).
-    from filter_symblend.command_files import MESH_SAVE_FORMATS
+    from filter_symblend.commands.files import MESH_SAVE_FORMATS
     code = ("import sys, pymeshlab; ms = pymeshlab.MeshSet(); ms.create_sphere(subdiv=1)\n"
             "for extension in sys.argv[2:]:\n"
             "    print(extension, flush=True); ms.save_current_mesh(f'{sys.argv[1]}/sphere.{extension}')\n")
@@ -327,7 +327,7 @@ def test_every_mesh_format_listed_is_one_pymeshlab_writes(tmp_path):
 
 def test_ctrl_c_while_loading_exits_130_with_one_line():
     code = ("import os, signal, sys, time; sys.argv[0] = 'symblend'; "
-            "from filter_symblend.command_start import quiet_interrupt_while_loading; "
+            "from filter_symblend.commands.start import quiet_interrupt_while_loading; "
             "quiet_interrupt_while_loading(); os.kill(os.getpid(), signal.SIGINT); time.sleep(5)")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert done.returncode == 130 and done.stderr == "symblend: interrupted; no output written\n"
@@ -356,6 +356,7 @@ def test_a_landmark_script_without_a_landmark_file_says_to_give_one(tmp_path, be
     assert "give the landmark file with -l LANDMARKS" in err and err.count("\n") == 1
 
 
+@pytest.mark.auto
 def test_symmetrize_with_automatic_pairs_needs_no_landmark_file(tmp_path, cow, capsys):
     mesh_path, output, report = tmp_path / "scan.obj", tmp_path / "out.ply", tmp_path / "report.json"
     ms = pymeshlab.MeshSet()
@@ -558,7 +559,7 @@ def test_a_flat_mesh_is_symmetrized_in_every_mode_and_stays_flat(tmp_path, mode)
 def test_library_warnings_are_silenced_and_ours_are_one_line(tmp_path, capsys, monkeypatch):
     import warnings
 
-    import filter_symblend.cli as cli
+    import filter_symblend.commands.landmark_files as landmark_files
     from filter_symblend import SymblendWarning
 
     def noisy(args):
@@ -566,7 +567,7 @@ def test_library_warnings_are_silenced_and_ours_are_one_line(tmp_path, capsys, m
         warnings.warn("a pair looks swapped:\n  check it", SymblendWarning)
         return 0
 
-    monkeypatch.setattr(cli, "_convert", noisy)
+    monkeypatch.setattr(landmark_files, "run_convert", noisy)
     assert main(["landmarks", "convert", str(tmp_path / "a.pp"), str(tmp_path / "b.pp")]) == 0
     assert capsys.readouterr().err == "symblend: warning: a pair looks swapped: check it\n"
 
@@ -599,7 +600,7 @@ def test_a_tps_study_with_three_pairs_and_midline_landmarks(tmp_path, cow, capsy
 
 
 def test_an_unwritable_output_folder_is_refused_first(tmp_path, bent_cow_files, capsys, monkeypatch):
-    import filter_symblend.command_files as command_files
+    import filter_symblend.commands.files as command_files
     mesh_path, landmark_path, *_ = bent_cow_files
     monkeypatch.setattr(command_files.os, "access", lambda path, mode: False)  # as a user without rights sees it
     assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "-o", str(tmp_path / "out.ply")]) == 1
@@ -620,7 +621,7 @@ def test_a_loaded_mesh_with_non_finite_coordinates_is_refused(tmp_path):
     """pymeshlab's readers drop such vertices (the header count then catches it); whatever reader keeps
     one, the check names it."""
     from filter_symblend import SymblendError
-    from filter_symblend.command_files import check_loaded_mesh
+    from filter_symblend.commands.files import check_loaded_mesh
     points = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, np.inf, 0.0]])
     with pytest.raises(SymblendError, match=r"scan.stl: vertex 2 has non-finite coordinates \(1 such vertices\); "
                                             r"repair the mesh"):

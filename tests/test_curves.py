@@ -12,7 +12,8 @@ from filter_symblend.landmarks.files import Landmark, LandmarkSet
 from filter_symblend.core.mesh_quantities import farthest_point_order
 from filter_symblend.core.neighbourhoods import mean_nearest_spacing
 from filter_symblend.landmarks.pairing import snap_pairs
-from filter_symblend.landmarks.semilandmarks import arc_lengths, edge_graph, equal_arc_samples, resample_curve, surface_path
+from filter_symblend.core.mesh_graph import edge_graph
+from filter_symblend.landmarks.semilandmarks import arc_lengths, equal_arc_samples, resample_curve, surface_path
 
 from conftest import symmetric_blob, twins
 

@@ -8,7 +8,7 @@ import pymeshlab
 import pytest
 
 from filter_symblend import synthetic
-from filter_symblend.cli import main
+from filter_symblend.commands.main import main
 from filter_symblend.landmarks.files import Landmark, LandmarkSet, write_landmarks
 from conftest import meshset_with_pairs
 

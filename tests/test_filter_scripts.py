@@ -221,6 +221,7 @@ def test_articulated_pose_preset(cow):
         synthetic.symmetry_error(posed, cow.all_left, cow.all_right) / 5
 
 
+@pytest.mark.auto
 def test_scan_cleanup_preset_needs_no_landmarks_and_simplifies_the_whole_mesh_despite_a_leftover_selection(cow):
     ms = pymeshlab.MeshSet()
     ms.add_mesh(pymeshlab.Mesh(vertex_matrix=synthetic.random_rigid(synthetic.bend(cow.points, 0.2), seed=6),

@@ -7,7 +7,7 @@ import pymeshlab
 import pytest
 
 from filter_symblend import LandmarkError, synthetic
-from filter_symblend.cli import main
+from filter_symblend.commands.main import main
 from filter_symblend.core.geometry import reflection_across_plane
 from filter_symblend.core.mesh_quantities import farthest_point_order
 from filter_symblend.landmarks.files import Landmark, LandmarkSet, write_landmarks

@@ -281,6 +281,7 @@ def test_three_pairs_and_four_midline_landmarks_are_enough_in_every_mode(cow, mo
     assert after < before  # measured: 0.0193 -> 0.0137-0.0150 (diagonal 2.14)
 
 
+@pytest.mark.auto
 def test_two_pairs_and_midline_landmarks_start_automatic_pairs(cow):
     from filter_symblend.checks.surface_asymmetry import mirror_asymmetry
     left, right, midline = _skull_like_landmarks(cow, 2)

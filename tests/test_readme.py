@@ -17,6 +17,7 @@ def _python_blocks(text: str) -> list[str]:
     return re.findall(r"```python\n(.*?)```", text, flags=re.S)
 
 
+@pytest.mark.auto  # the README's example pairs automatically
 def test_the_readme_example_runs(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     namespace = {}
@@ -25,7 +26,8 @@ def test_the_readme_example_runs(tmp_path, monkeypatch):
     assert (tmp_path / "cow_symmetrized.ply").exists()
 
 
-@pytest.mark.parametrize("page", [page for page in DOCS if _python_blocks(page.read_text())], ids=lambda p: p.name)
+@pytest.mark.parametrize("page", [pytest.param(page, marks=[pytest.mark.auto] * (page.name == "automatic-pairs.md"))
+                                  for page in DOCS if _python_blocks(page.read_text())], ids=lambda p: p.name)
 def test_the_examples_of_each_documentation_page_run_in_order(page, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     namespace = {}

@@ -16,8 +16,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sparse
 
+from ..core.mesh_graph import one_pair_per_vertex
 from .config import AutoConfig
-from .graph import one_pair_per_vertex
 
 
 def _neighbours(adjacency: sparse.csr_matrix, vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

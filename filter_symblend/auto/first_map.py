@@ -27,12 +27,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..checks.surface_asymmetry import surface_mirror_planes
+from ..core.mesh_graph import one_pair_per_vertex
+from ..core.mirror_planes import surface_mirror_planes
 from ..errors import SymmetryNotFoundError
 from .config import AutoConfig
 from .connectivity import tessellation_mirror
 from .field import MirrorField, field_centres, refitted, register, robust_fit, robust_tolerance
-from .graph import one_pair_per_vertex
 from .maps import MirrorMap, affine_map, field_map, pairs_map, plane_map
 from .registration import coherent_point_drift, registration_sample
 from .spectral import intrinsic_mirror, working_mesh

@@ -25,8 +25,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..core.geometry import MIRROR_X, proper_rotation_fit
+from ..core.mesh_graph import one_pair_per_vertex
 from .config import AutoConfig
-from .graph import one_pair_per_vertex
 from .surface import Surface
 
 def local_maps(points: np.ndarray, partner: np.ndarray, queries: np.ndarray, paired: np.ndarray,

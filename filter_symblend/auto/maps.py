@@ -17,7 +17,7 @@ import dataclasses
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..checks.surface_asymmetry import fit_surface_mirror_plane
+from ..core.mirror_planes import fit_surface_mirror_plane
 from ..core.geometry import normalize, reflection_across_plane, whitening
 from .config import AutoConfig
 from .field import MirrorField

@@ -27,15 +27,16 @@ import dataclasses
 import numpy as np
 
 from ..core.geometry import voxel_grid
+from ..core.mesh_graph import one_pair_per_vertex
+from ..core.surface_points import vertex_points
 from ..core.symmetrize import CheckedLandmarks, check_landmarks
 from ..errors import GeometryError
 from .config import AutoConfig
 from .connectivity import ring_consistent, tessellation_mirror
 from .field import robust_tolerance
-from .graph import one_pair_per_vertex
 from .growth import grow_and_prune
 from .maps import MirrorMap
-from .surface import Surface, vertex_points
+from .surface import Surface
 from .twins import find_twins
 
 

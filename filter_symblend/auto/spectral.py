@@ -37,8 +37,8 @@ from scipy.sparse.linalg import ArpackNoConvergence, eigsh
 from scipy.spatial import cKDTree
 
 from ..core.geometry import voxel_grid
+from ..core.mesh_graph import vertex_adjacency
 from .config import AutoConfig
-from .graph import vertex_adjacency
 
 
 @dataclasses.dataclass(frozen=True)

@@ -20,10 +20,11 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..core.geometry import flat_normal, normalize
+from ..core.mesh_graph import vertex_adjacency
+from ..core.surface_points import barycentric, vertex_points
 from ..core.mesh_quantities import vertex_normals
 from ..core.mirror_fill import TriangleSurface
 from .config import DEFAULT, AutoConfig
-from .graph import vertex_adjacency
 
 
 class Surface:
@@ -148,28 +149,6 @@ class Surface:
         second = distance[:, -1] if k == 2 else np.full(len(queries), np.inf)
         ratio = np.divide(distance[:, 0], second, out=np.zeros(len(queries)), where=second > 0)
         return self.usable_index[nearest[:, 0]], distance[:, 0], ratio
-
-
-def vertex_points(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The ``vertices`` (n,) as points of the surface: corners (n, 3) (the vertex thrice) and barycentric
-    weights (n, 3) (all on the first)."""
-    weights = np.zeros((len(vertices), 3))
-    weights[:, 0] = 1.0
-    return np.repeat(vertices[:, None], 3, axis=1), weights
-
-
-def barycentric(corners: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Barycentric weights (Q, 3) of ``points`` (Q, 3) in the triangles ``corners`` (Q, 3, 3),
-    clipped to the triangle (the points are on it up to rounding)."""
-    a = corners[:, 0]
-    u, v, w = corners[:, 1] - a, corners[:, 2] - a, points - a
-    uu, uv, vv = (np.einsum("ij,ij->i", x, y) for x, y in ((u, u), (u, v), (v, v)))
-    wu, wv = np.einsum("ij,ij->i", w, u), np.einsum("ij,ij->i", w, v)
-    determinant = uu * vv - uv * uv
-    safe = np.where(determinant > 0, determinant, 1.0)
-    s, t = (vv * wu - uv * wv) / safe, (uu * wv - uv * wu) / safe
-    weights = np.clip(np.column_stack([1.0 - s - t, s, t]), 0.0, 1.0)
-    return weights / weights.sum(axis=1, keepdims=True)
 
 
 class Outline(Surface):

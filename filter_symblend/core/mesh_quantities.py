@@ -65,3 +65,8 @@ def farthest_point_order(points: np.ndarray, count: int, start: int | None = Non
         chosen[k] = np.argmax(distance)
         np.minimum(distance, squared_distances(chosen[k], change), out=distance)
     return chosen
+
+
+def evenly(points: np.ndarray, count: int) -> np.ndarray:
+    """At most ``count`` rows of ``points`` (N, 3), evenly strided."""
+    return points if len(points) <= count else points[np.linspace(0, len(points) - 1, count).astype(np.int64)]

@@ -17,11 +17,12 @@ import warnings
 import numpy as np
 
 from ..core.landmark_pairs import LandmarkPairs
+from ..core.mesh_graph import edge_graph
 from ..core.neighbourhoods import mean_nearest_spacing
 from ..errors import LandmarkError, SymblendWarning
 from .files import LandmarkSet
 from .pairing import LEFT_WORDS, NUMBERED, RIGHT_WORDS, SnappedPairs, nearest_vertices, side_and_base
-from .semilandmarks import edge_graph, resample_curve
+from .semilandmarks import resample_curve
 
 DEFAULT_SPACING = 0.01  # of the bounding-box diagonal, when no spacing is given
 

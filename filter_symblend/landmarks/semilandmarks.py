@@ -2,7 +2,7 @@
 the surface and resampled to equally spaced vertices; a left and a right curve become pairs.
 
 The curve between consecutive control vertices is the shortest path on the mesh's edge
-graph (``scipy.sparse.csgraph.dijkstra``), so it follows the surface instead of cutting a
+graph (core/mesh_graph.edge_graph, by ``scipy.sparse.csgraph.dijkstra``), so it follows the surface instead of cutting a
 chord through it. Edge paths overestimate the true geodesic by a few percent (up to ~8 % on
 a regular grid), but a left curve and its twin are paths on mirror-image surfaces, so
 sampling both at the same fractions of their own lengths pairs them: the usual
@@ -14,31 +14,12 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from scipy.sparse import coo_matrix, csr_matrix
+from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from ..errors import LandmarkError
 
 SEARCH_REACH = 4.0  # Dijkstra first stops at this many times the longest control chord
-
-
-def edge_graph(points: np.ndarray, faces: np.ndarray) -> csr_matrix:
-    """Symmetric (N, N) sparse matrix of straight distances along the mesh's edges and across
-    its edges: between the two far corners of every pair of triangles that share an edge. The
-    across-edge links let paths run diagonally through the triangulation, which halves the
-    zig-zag that makes pure edge paths longer than the geodesic and tessellation-dependent."""
-    directed = np.concatenate([faces[:, [0, 1, 2]], faces[:, [1, 2, 0]], faces[:, [2, 0, 1]]])
-    key = np.sort(directed[:, :2], axis=1)
-    order = np.lexsort((key[:, 1], key[:, 0]))
-    key, far = key[order], directed[order, 2]
-    shared = np.flatnonzero((key[1:] == key[:-1]).all(axis=1))  # consecutive half-edges of one edge
-    links = np.concatenate([key, np.column_stack([far[shared], far[shared + 1]])])
-    links = np.unique(np.sort(links, axis=1), axis=0)
-    links = links[links[:, 0] != links[:, 1]]
-    lengths = np.linalg.norm(points[links[:, 0]] - points[links[:, 1]], axis=1)
-    n = len(points)
-    graph = coo_matrix((lengths, (links[:, 0], links[:, 1])), shape=(n, n)).tocsr()
-    return (graph + graph.T).tocsr()
 
 
 def surface_path(graph: csr_matrix, points: np.ndarray, controls: np.ndarray,

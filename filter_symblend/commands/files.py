@@ -1,14 +1,20 @@
-"""Files of the ``symblend`` command checked before any work: where outputs go, and whether a mesh
-loaded whole."""
+"""The ``symblend`` command's files: outputs checked before any work, meshes loaded whole (PLY attributes
+included), and every output written under a temporary name, then renamed."""
 
 from __future__ import annotations
 
+import json
 import os
 import pathlib
 
 import numpy as np
+import pymeshlab
 
-from .errors import SymblendError
+from ..atomic import replaced_when_done, write_text
+from ..errors import SymblendError
+from ..meshlab.attributes import custom_attribute_names
+from ..meshlab.ply_attributes import load_mesh_with_attributes
+from .console import one_line
 
 # Extensions pymeshlab writes (tests/test_cli.py saves a mesh in each).
 MESH_SAVE_FORMATS = ("3ds", "ctm", "dae", "e57", "idtf", "json", "nxs", "nxz", "obj", "off", "ply", "stl",
@@ -87,3 +93,66 @@ def check_loaded_mesh(path: pathlib.Path, points: np.ndarray, faces: np.ndarray)
     if declared_faces is not None and len(faces) < declared_faces:
         raise SymblendError(f"{path}: the file declares {declared_faces} faces and only {len(faces)} could be read "
                             "(faces that refer to missing vertices, or a damaged file); repair the mesh first.")
+
+
+def check_outputs(args, outputs: dict[str, pathlib.Path | None], inputs: list[pathlib.Path]) -> None:
+    """Every output path of the command (``{what: path or None}``) checked before any work (see
+    :func:`check_output_path`; ``args.overwrite`` if the command has it); two outputs may not share a file."""
+    overwrite = getattr(args, "overwrite", False)
+    given = {what: path for what, path in outputs.items() if path is not None}
+    for what, path in given.items():
+        check_output_path(path, inputs, overwrite, what, MESH_SAVE_FORMATS if what == "output mesh" else None)
+    resolved = [path.resolve() for path in given.values()]
+    for index, path in enumerate(resolved):
+        if path in resolved[:index]:
+            raise SymblendError(f"{list(given.values())[index]}: given for two outputs; give each its own file.")
+
+
+def load_mesh(path: pathlib.Path, ms: pymeshlab.MeshSet | None = None) -> pymeshlab.MeshSet:
+    """``path`` loaded as a new layer of ``ms`` (a new MeshSet by default), PLY attributes included."""
+    if not path.is_file():
+        raise SymblendError(f"{path}: no such mesh file.")
+    ms = pymeshlab.MeshSet() if ms is None else ms
+    try:
+        load_mesh_with_attributes(ms, path)
+    except pymeshlab.PyMeshLabException as error:
+        raise SymblendError(f"{path}: pymeshlab cannot read it ({one_line(error)}).") from None
+    check_loaded_mesh(path, ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix())
+    return ms
+
+
+def save_atomically(ms: pymeshlab.MeshSet, output: pathlib.Path) -> None:
+    """Save the current mesh to a temporary name beside ``output``, then rename it. A PLY keeps
+    quality and every custom per-vertex scalar attribute."""
+    options = {}
+    if output.suffix.lower() == ".ply":
+        options = {"save_vertex_quality": True,
+                   **{f"__ca_vs__{name}": True for name in custom_attribute_names(ms)["vs"]}}
+    try:
+        with replaced_when_done(output) as temporary:
+            ms.save_current_mesh(str(temporary), **options)
+    except pymeshlab.PyMeshLabException as error:
+        raise SymblendError(f"{output}: pymeshlab cannot write it ({one_line(error)}).") from None
+
+
+def save_quality_ply(ms: pymeshlab.MeshSet, path: pathlib.Path, quality: np.ndarray) -> None:
+    """Save the current mesh of ``ms`` to ``path`` with ``quality`` (N,) as its per-vertex quality."""
+    mesh = ms.current_mesh()
+    copy = pymeshlab.Mesh(mesh.vertex_matrix(), mesh.face_matrix(), v_scalar_array=np.asarray(quality, dtype=float))
+    scratch = pymeshlab.MeshSet()
+    scratch.add_mesh(copy)
+    save_atomically(scratch, path)
+
+
+def write_report(path: pathlib.Path | None, report: dict) -> None:
+    """Write ``report`` as JSON to ``path`` (if given) under a temporary name, then rename it."""
+    if path:
+        write_text(path, json.dumps(report, indent=2, default=_jsonable) + "\n")
+
+
+def _jsonable(value):
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"{type(value).__name__} is not JSON serializable")

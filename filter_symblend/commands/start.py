@@ -1,7 +1,7 @@
 """The ``symblend`` command's start-up: a Ctrl-C while the libraries load exits 130 with one line.
 
 Imported first by the package; it acts only when this process is the ``symblend`` console script, and
-:func:`filter_symblend.cli.main` restores Python's own handler once start-up is over.
+:func:`filter_symblend.commands.main.main` restores Python's own handler once start-up is over.
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""A whole study in one call: ``symblend symmetrize`` over the rows of a manifest, locally or on a Dask cluster.
+"""``symblend batch MANIFEST.csv -o OUTDIR``, a whole study in one call: ``symblend symmetrize`` over the rows
+of a manifest, locally or on a Dask cluster (:func:`run` is the same from Python).
 
 The manifest is a CSV with a header: ``mesh`` (required), ``landmarks`` (optional), and any option of
 ``symblend symmetrize`` as a column (``mode``, ``pairs``, ``pair_table``, ``midline``, ...), which
@@ -20,10 +21,18 @@ import os
 import pathlib
 import sys
 import time
+import warnings
 
-from .atomic import write_text
-from .cli import _add_symmetrize_arguments, _one_line, _terminal_progress, symmetrize_arguments, symmetrize_files
-from .errors import SymblendError
+import pymeshlab
+from threadpoolctl import threadpool_limits
+
+from ..atomic import write_text
+from ..errors import SymblendError
+from ..landmarks.files import Landmark, LandmarkSet, write_tps_study
+from .console import one_line, terminal_progress
+from .options import add_filter_options, add_landmark_options, add_missing_option, add_symmetrize_arguments, \
+    symmetrize_arguments
+from .symmetrize import symmetrize_files
 
 ASYMMETRY_FIELDS = ("landmark_asymmetry_before", "landmark_asymmetry_after", "mirror_asymmetry_before",
                     "mirror_asymmetry_after")  # report entries whose RMS (relative) the summary shows
@@ -33,6 +42,47 @@ OUTPUT_OPTIONS = ("output", "report", "overwrite", "help", "save_pair_table")  #
 SCHEDULER_TIMEOUT = 30  # seconds to wait for a Dask scheduler to answer
 TRUE_WORDS = {"1", "true", "yes", "y", "x"}
 FALSE_WORDS = {"", "0", "false", "no", "n"}
+
+
+def register(commands) -> None:
+    """Add the command to ``commands`` (argparse subparsers)."""
+    batch = commands.add_parser("batch", help="symmetrize every specimen of a manifest CSV (a study), locally or "
+                                              "on a Dask cluster")
+    batch.add_argument("manifest", type=pathlib.Path,
+                       help="CSV with a header: mesh, optionally landmarks and any symmetrize option per row")
+    batch.add_argument("-o", "--output", required=True, type=pathlib.Path, metavar="OUTDIR",
+                       help="folder for <mesh stem>.ply/.json, summary.csv and landmarks.tps")
+    batch.add_argument("--workers", type=int, default=None, metavar="N",
+                       help="local processes (default: the cores), BLAS at one thread each")
+    batch.add_argument("--scheduler", metavar="ADDRESS",
+                       help="run on the Dask cluster at ADDRESS (tcp://host:8786); needs filter-symblend[cluster]")
+    batch.add_argument("--force", action="store_true", help="redo rows whose outputs are newer than their inputs")
+    add_landmark_options(batch, required=False, note=" (default for rows without a landmarks column)",
+                         save_pair_table=False)
+    add_missing_option(batch)
+    add_filter_options(batch)
+    batch.set_defaults(handler=run_command, parser=batch)
+
+
+def run_command(args) -> int:
+    """The command: the options given on its line are every row's defaults; exit status 1 if a row failed."""
+    if args.workers is not None and args.workers < 1:
+        raise SymblendError(f"--workers {args.workers}: give 1 or more processes.")
+    defaults = []  # the options given on the command line, as words of symblend symmetrize
+    for action in args.parser._actions:
+        if not action.option_strings or action.dest in (*OUTPUT_OPTIONS, "manifest", "workers", "scheduler", "force"):
+            continue
+        value = getattr(args, action.dest)
+        if value == action.default or value is None:
+            continue
+        defaults += [action.option_strings[-1]] if action.nargs == 0 else [action.option_strings[-1], str(value)]
+    summaries = run(args.manifest, args.output, defaults, args.workers, args.scheduler, args.force,
+                    progress=sys.stderr.isatty())
+    failed = [s for s in summaries if s["status"] == "failed"]
+    print(f"{args.output}: {len(summaries) - len(failed)} of {len(summaries)} specimens symmetrized"
+          + (f", {sum(s['status'] == 'done before' for s in summaries)} of them done before" if not args.force else "")
+          + (f"; {len(failed)} failed (see summary.csv)" if failed else ""))
+    return 1 if failed else 0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -56,7 +106,7 @@ class Row:
 def _option_table() -> dict[str, argparse.Action]:
     """``symblend symmetrize``'s options by destination name (``pair_table``, ``mode``, ...)."""
     parser = argparse.ArgumentParser(add_help=False)
-    _add_symmetrize_arguments(parser)
+    add_symmetrize_arguments(parser)
     return {action.dest: action for action in parser._actions if action.option_strings}
 
 
@@ -115,10 +165,6 @@ def read_manifest(manifest: str | os.PathLike, outdir: str | os.PathLike, defaul
 def run_row(row: Row) -> dict:
     """One specimen, as ``symblend symmetrize`` runs it: its summary row, and its landmark coordinates
     after symmetrizing (``"landmarks"``: [[name, x, y, z], ...]) for the study's TPS file."""
-    import warnings
-
-    from threadpoolctl import threadpool_limits
-
     start = time.perf_counter()
     summary = {"mesh": str(row.mesh), "output": str(row.output)}
     try:
@@ -127,11 +173,11 @@ def run_row(row: Row) -> dict:
             report, ms = symmetrize_files(symmetrize_arguments(list(row.arguments)))
     except Exception as error:  # noqa: BLE001  one specimen's failure, of any kind, must not stop the study
         if isinstance(error, SymblendError):
-            message = _one_line(error)
+            message = one_line(error)
         elif isinstance(error, OSError):
             message = f"{error.filename}: {error.strerror}"
         else:
-            message = f"unexpected {type(error).__name__}: {_one_line(error)} (please report it)"
+            message = f"unexpected {type(error).__name__}: {one_line(error)} (please report it)"
         return {**summary, "status": "failed", "seconds": round(time.perf_counter() - start, 2), "error": message}
     return {**summary, "status": "ok", "seconds": round(time.perf_counter() - start, 2),
             **_from_report(report, ms.current_mesh().vertex_matrix())}
@@ -148,8 +194,6 @@ def _from_report(report: dict, points) -> dict:
 def _done_before(row: Row) -> dict:
     """The summary of a row done by an earlier run, from its report."""
     report = json.loads(row.report.read_text())
-    import pymeshlab
-
     ms = pymeshlab.MeshSet()
     ms.load_new_mesh(str(row.output))
     return {"mesh": str(row.mesh), "output": str(row.output), "status": "done before", "seconds": 0.0,
@@ -194,8 +238,6 @@ def _write_summary(path: pathlib.Path, summaries: list[dict]) -> None:
 
 
 def _write_study_landmarks(path: pathlib.Path, summaries: list[dict]) -> None:
-    from .landmarks.files import Landmark, LandmarkSet, write_tps_study
-
     study = {pathlib.Path(s["mesh"]).stem: LandmarkSet([Landmark(name, (x, y, z)) for name, x, y, z in s["landmarks"]])
              for s in summaries if s.get("landmarks")}
     if study:
@@ -228,7 +270,7 @@ def run(manifest: str | os.PathLike, outdir: str | os.PathLike, defaults: list[s
             if summary["status"] == "failed":
                 print(f"symblend: {row.mesh.name}: {summary['error']}", file=sys.stderr)
             if progress:
-                _terminal_progress(100.0 * done / len(rows), f"{done}/{len(rows)} specimens, last: {row.mesh.name} "
+                terminal_progress(100.0 * done / len(rows), f"{done}/{len(rows)} specimens, last: {row.mesh.name} "
                                                               f"{summary['status']}")
     ordered = [summaries[row] for row in rows]
     _write_summary(outdir / "summary.csv", ordered)

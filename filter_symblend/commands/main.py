@@ -1,0 +1,55 @@
+"""``symblend``: the parser of every subcommand, and :func:`main`, the console script's entry point."""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import warnings
+
+from ..errors import SymblendError, SymblendWarning
+from . import batch, landmark_files, mlx, report, symmetrize
+from .console import Parser, one_line, show_warning
+
+DESCRIPTION = ("The symblend command: symmetrize a mesh from a landmark file or a whole study, run filter scripts, "
+               "compare before and after, check and convert landmarks.")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of ``symblend`` and its subcommands; each sets ``handler``, the function that runs it."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        installed = version("filter-symblend")
+    except PackageNotFoundError:
+        installed = "unknown (not installed)"
+    parser = Parser(prog="symblend", description=DESCRIPTION)
+    parser.add_argument("--version", action="version", version=f"symblend (filter-symblend) {installed}")
+    commands = parser.add_subparsers(dest="command", required=True)
+    for command in (symmetrize, batch, mlx, report, landmark_files):
+        command.register(commands)
+    return parser
+
+
+def main(argv=None) -> int:
+    """Exit status: 0 done, 1 bad input (one line on stderr, nothing written), 2 usage, 130 interrupted."""
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # start-up is over: Ctrl-C is KeyboardInterrupt
+    try:
+        args = build_parser().parse_args(argv)
+        with warnings.catch_warnings():
+            # numpy/scipy warnings are expected where results are checked (the core raises on any
+            # non-finite output); ours name a cause and a fix.
+            warnings.simplefilter("ignore")
+            warnings.simplefilter("always", SymblendWarning)
+            warnings.showwarning = show_warning
+            return args.handler(args)
+    except SymblendError as error:
+        print(f"symblend: error: {one_line(error)}", file=sys.stderr)
+        return 1
+    except OSError as error:
+        print(f"symblend: error: {error.filename}: {error.strerror}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("symblend: interrupted; no output written", file=sys.stderr)
+        return 130
+

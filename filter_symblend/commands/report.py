@@ -1,0 +1,76 @@
+"""``symblend report BEFORE AFTER``: the before/after check of two meshes, the two-way Hausdorff distance
+and the mirror asymmetry of each, as a table, JSON, a picture or a distance mesh."""
+
+from __future__ import annotations
+
+import pathlib
+import sys
+
+from ..checks.surface_asymmetry import CHECK_SAMPLES
+from ..checks.verdict import result_warnings
+from ..core.mirror_fill import distances_to_surface
+from ..meshlab.layer_checks import compare_layers
+from .files import check_outputs, load_mesh, save_quality_ply, write_report
+
+
+def register(commands) -> None:
+    """Add the command to ``commands`` (argparse subparsers)."""
+    report = commands.add_parser("report", help="before/after check: Hausdorff and mirror asymmetry")
+    report.add_argument("before", type=pathlib.Path, help="mesh before symmetrizing")
+    report.add_argument("after", type=pathlib.Path, help="mesh after symmetrizing")
+    report.add_argument("--png", type=pathlib.Path,
+                        help="picture of both meshes coloured by mirror asymmetry (needs matplotlib)")
+    report.add_argument("--json", type=pathlib.Path, help="write the numbers as JSON")
+    report.add_argument("--per-vertex", action="store_true",
+                        help="add each vertex's Hausdorff distance (before -> after and after -> before) to the JSON")
+    report.add_argument("--distance-ply", type=pathlib.Path, metavar="MESH.ply",
+                        help="write the mesh after with each vertex's distance to the mesh before as its quality "
+                             "(MeshLab colours it with Colorize by vertex Quality)")
+    report.set_defaults(handler=run)
+
+
+
+def run(args) -> int:
+    """The command: the table on stdout, then the JSON, the distance mesh and the picture that were asked for."""
+    outputs = {"picture": args.png, "JSON report": args.json, "distance mesh": args.distance_ply}
+    check_outputs(args, outputs, [args.before, args.after])
+    ms = load_mesh(args.before)
+    before_id = ms.current_mesh_id()
+    after_id = load_mesh(args.after, ms).current_mesh_id()
+    # The picture colours every vertex; the numbers alone need a sample.
+    result = compare_layers(ms, before_id, after_id, None if args.png else CHECK_SAMPLES)
+    before, after = result["mirror_asymmetry_before"], result["mirror_asymmetry_after"]
+    hausdorff = result["hausdorff_before_after"]
+    keys = ("max", "mean", "rms", "p50", "p90", "p99")
+    print(f"{'(mesh units)':24}" + "".join(f"{k:>11}" for k in keys))
+    print(f"{'Hausdorff before<->after':24}" + "".join(f"{hausdorff[k]:11.4g}" for k in keys))
+    for label, measured in (("mirror asymmetry before", before), ("mirror asymmetry after", after)):
+        print(f"{label:24}" + "".join(f"{measured[k]:11.4g}" for k in keys))
+    print(f"{'(% of the diagonal)':24}" + "".join(f"{k:>11}" for k in keys))
+    for label, measured in (("mirror asymmetry before", before), ("mirror asymmetry after", after)):
+        print(f"{label:24}" + "".join(f"{100 * measured[k + '_relative']:11.4g}" for k in keys))
+    result["warnings"] = result_warnings(before, after, hausdorff, ms.mesh(before_id).bounding_box().diagonal())
+    for message in result["warnings"]:
+        print(f"warning: {message}", file=sys.stderr)
+    before_mesh, after_mesh = ms.mesh(before_id), ms.mesh(after_id)
+    if args.per_vertex or args.distance_ply:  # one direction of the Hausdorff distance, every vertex
+        after_to_before = distances_to_surface(before_mesh.vertex_matrix(), before_mesh.face_matrix(),
+                                               after_mesh.vertex_matrix())
+    if args.per_vertex:
+        result["hausdorff_per_vertex"] = {
+            "before_to_after": distances_to_surface(after_mesh.vertex_matrix(), after_mesh.face_matrix(),
+                                                    before_mesh.vertex_matrix()),
+            "after_to_before": after_to_before}
+    if args.distance_ply:
+        ms.set_current_mesh(after_id)
+        save_quality_ply(ms, args.distance_ply, after_to_before)
+        print(f"distance mesh: {args.distance_ply} (quality: each vertex's distance to the mesh before)")
+    if args.png:
+        from ..checks.render import render_comparison  # matplotlib, only for --png
+
+        meshes = [dict(result[key], points=ms.mesh(mesh_id).vertex_matrix(), faces=ms.mesh(mesh_id).face_matrix())
+                  for key, mesh_id in (("mirror_asymmetry_before", before_id), ("mirror_asymmetry_after", after_id))]
+        result["png_views"] = render_comparison(args.png, *meshes, titles=(args.before.name, args.after.name))
+        print(f"picture: {args.png}")
+    write_report(args.json, result)
+    return 0
