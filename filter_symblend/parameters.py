@@ -236,6 +236,11 @@ def validate_parameters(given: dict[str, Any], layers: tuple[str, ...] = ALL) ->
     return {p.name: p.validate(given.get(p.name, p.default)) for p in accepted}
 
 
+def options_of(options: dict[str, Any], layers: tuple[str, ...]) -> dict[str, Any]:
+    """The entries of ``options`` whose parameters belong to ``layers`` (e.g. CORE: what the solve takes)."""
+    return {p.name: options[p.name] for p in PARAMETERS if p.layer in layers and p.name in options}
+
+
 def parameters_doc(layers: tuple[str, ...] = ALL) -> str:
     """numpy-style 'Parameters' entries, pymeshlab style: ``name : type = default``."""
     lines = []

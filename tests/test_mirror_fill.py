@@ -27,9 +27,18 @@ def test_closest_points_on_triangles_match_a_dense_sampling():
         assert weights.min() > -1e-9 and weights.sum() < 1 + 1e-9
 
 
-def test_closest_points_on_a_surface_are_exact_on_the_surface_itself(cow):
-    on_surface = cow.points[cow.faces[:, :3]].mean(axis=1)[:500]
-    np.testing.assert_allclose(closest_points_on_surface(cow.points, cow.faces, on_surface), on_surface, atol=1e-12)
+def test_closest_points_on_a_box_are_the_points_clamped_to_it():
+    """Outside an axis-aligned box the closest surface point is the point clamped to the box (an independent
+    formula); on its faces, the point itself."""
+    corners = np.array([[x, y, z] for x in (0.0, 2.0) for y in (0.0, 1.0) for z in (0.0, 3.0)])
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    faces = np.array([tri for a, b, c, d in quads for tri in ((a, b, c), (a, c, d))])
+    rng = np.random.default_rng(3)
+    outside = rng.uniform(-2.0, 5.0, size=(2000, 3))
+    outside = outside[((outside < corners.min(axis=0)) | (outside > corners.max(axis=0))).any(axis=1)]
+    clamped = np.clip(outside, corners.min(axis=0), corners.max(axis=0))
+    np.testing.assert_allclose(closest_points_on_surface(corners, faces, outside), clamped, atol=1e-12)
+    np.testing.assert_allclose(closest_points_on_surface(corners, faces, clamped), clamped, atol=1e-12)
 
 
 def _cow_with_a_hole(cow, radius=0.06, pairs=150):

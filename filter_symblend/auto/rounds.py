@@ -24,7 +24,7 @@ from ..core.landmark_asymmetry import fit_mirror_plane
 from ..core.neighbourhoods import connecting_width, mean_nearest_spacing, pair_weights
 from ..core.symmetrize import CheckedLandmarks, SymmetrizationResult, scaled_progress, solve
 from ..errors import DegenerateNeighbourhoodError, GeometryError
-from ..parameters import CORE, PARAMETERS
+from ..parameters import CORE, options_of
 from .config import DEFAULT, AutoConfig
 from .field import MirrorField, field_centres, register
 from .first_map import coverage, first_map
@@ -32,7 +32,6 @@ from .maps import MirrorMap, field_map, plane_map
 from .pairs import as_landmarks, find_pairs, spread
 from .surface import Outline, Surface, build_surface
 
-CORE_NAMES = frozenset(p.name for p in PARAMETERS if p.layer in CORE)
 
 
 def _connected_options(points: np.ndarray, landmarks: CheckedLandmarks, options: dict) -> dict:
@@ -87,7 +86,7 @@ def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, l
     if len(surface.usable_index) < 4:
         raise GeometryError(f"The mesh has {len(surface.usable_index)} vertices that can be paired (on a triangle "
                             "with an area, not excluded); automatic pairs need more.")
-    core = {key: options[key] for key in options if key in CORE_NAMES}
+    core = options_of(options, CORE)
     rounds_allowed = options["auto_iterations"]
     step = 70.0 / (rounds_allowed + 2)
     sample = spread(points, surface.usable_index, max(config.samples, 2 * options["auto_pair_count"]))

@@ -1,10 +1,11 @@
 """The pymeshlab face of the filter: read the pairs from the current mesh, run
-:func:`symmetrize`, add the warped mesh as one new layer.
+:func:`filter_symblend.symmetrize`, add the warped mesh as one new layer.
 
-The input layer is never modified. The output is built from a copy of the
-input (so colours, UVs, textures and selection survive), its coordinates and
-quality set through MeshLab's own per-vertex function filters, then copied once
-more to drop the scratch attributes (pymeshlab cannot delete attributes; the
+The adapter reads the mesh, its attributes and its selection into one validated problem
+(pipeline/problem) and the result back into a layer. The input layer is never modified. The output is
+built from a copy of the input (so colours, UVs, textures and selection survive), its coordinates and
+quality set through MeshLab's own per-vertex function filters, then copied once more to drop the
+scratch attributes (pymeshlab cannot delete attributes; the
 copy drops custom attributes). The before/after checks run in a second thread
 beside the warp and the layer building. On any failure, a check's included,
 every layer the filter added is deleted and the input is current again.
@@ -24,11 +25,9 @@ from . import recording
 from ..checks.hausdorff import two_way_distance
 from ..checks.surface_asymmetry import input_asymmetry, input_planes, output_asymmetry
 from ..checks.verdict import result_warnings
-from ..core.landmark_pairs import check_points
-from ..core.symmetrize import check_landmarks
 from ..errors import MeshSetError, ParameterError, SymblendWarning
-from ..parameters import PARAMETERS, keyword_signature, parameters_doc, validate_parameters
-from ..pipeline import symmetrize
+from ..parameters import keyword_signature, parameters_doc, validate_parameters
+from ..pipeline import build_problem, solve_problem
 from .attributes import optional_attribute, read_landmark_attributes
 
 FILTER_NAME = "generate_symmetrized_mesh"
@@ -133,34 +132,27 @@ def _mirror_check(side, points: np.ndarray, faces: np.ndarray, starts, diagonal:
 
 def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExecutor):
     """(the warp of ``mesh`` with the fill of its missing region, {report key: future} of its checks); no
-    layer added. The checks run in ``pool``: the input's from the start (its own planes, found beside the
-    warp), the output's once the warp is known (from the input's planes: one rule for both)."""
+    layer added. ``options``: every parameter, validated. The checks run in ``pool`` once the problem is
+    valid: the input's from the start (its own planes, found beside the warp), the output's once the warp
+    is known (from the input's planes: one rule for both)."""
     region = _missing_region(mesh, options["missing_region"], options["weight_attribute"])
-    core = {p.name: options[p.name] for p in PARAMETERS if p.layer != "meshset"}
-    points, faces = mesh.vertex_matrix(), mesh.face_matrix()
-    diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
     missing, missing_faces = (None, None) if region is None else region
-    checks, starts = {}, None
-
-    def measure_input():  # beside the warp: the input's planes, then its asymmetry
-        nonlocal starts
-        starts = pool.submit(input_planes, points)
+    landmarks = {}
+    if options["pairs"] != "auto":  # with automatic pairs alone, the landmark attributes are not read
+        pairs = read_landmark_attributes(mesh, **{name: options[name] for name in
+                                                  ("pair_attribute", "midline_attribute", "weight_attribute")})
+        landmarks = dict(left=pairs.left, right=pairs.right, pair_ids=pairs.ids, midline=pairs.midline,
+                         left_weights=pairs.left_weights, right_weights=pairs.right_weights)
+    problem = build_problem(mesh.vertex_matrix(), options, faces=mesh.face_matrix(), missing=missing,
+                            missing_faces=missing_faces, **landmarks)
+    points, faces = problem.points, problem.faces
+    diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
+    checks = {}
+    if options["checks"] != "none":
+        starts = pool.submit(input_planes, points)  # beside the warp: the input's planes, then its asymmetry
         checks["mirror_asymmetry_before"] = pool.submit(_mirror_check, input_asymmetry, points, faces, starts,
                                                         diagonal)
-    if options["pairs"] == "auto":  # the landmark attributes are not read
-        if options["checks"] != "none":
-            measure_input()
-        result = symmetrize(points, progress=progress, faces=faces, missing=missing, missing_faces=missing_faces,
-                            **core)
-    else:
-        names = {name: options[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")}
-        pairs = read_landmark_attributes(mesh, **names)
-        if options["checks"] != "none":  # once the pairs pass the warp's own checks
-            check_landmarks(check_points(points), pairs.left, pairs.right, pairs.ids, pairs.midline,
-                            pairs.left_weights, pairs.right_weights)
-            measure_input()
-        result = symmetrize(points, pairs.left, pairs.right, pairs.ids, pairs.midline, pairs.left_weights,
-                            pairs.right_weights, progress, faces, missing=missing, missing_faces=missing_faces, **core)
+    result = solve_problem(problem, progress)
     if options["checks"] != "none":
         checks["mirror_asymmetry_after"] = pool.submit(_mirror_check, output_asymmetry, result.points, faces, starts,
                                                       diagonal)

@@ -1,0 +1,119 @@
+"""The problem a run solves, converted and validated once: ``build_problem`` checks the arguments in a fixed
+order (the options, then the points, the faces, the vertices kept out, the missing region, whether the
+landmarks fit the pair source, and the landmarks themselves), each message naming the argument, as
+scipy's RBFInterpolator does; every adapter (the MeshSet filter, the command, a batch row, a filter
+script) builds one and hands it to :func:`filter_symblend.pipeline.run.solve_problem`."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..auto import DEFAULT, AutoConfig
+from ..core.landmark_pairs import check_points
+from ..core.symmetrize import CheckedLandmarks, check_landmarks
+from ..errors import LandmarkError, ParameterError
+
+
+@dataclasses.dataclass(frozen=True)
+class Problem:
+    """One symmetrization, validated: ``points`` (N, 3) float, ``faces`` (F, 3) int (none: a point cloud),
+    ``landmarks`` (None with ``pairs='auto'``), ``options`` (every parameter, validated by
+    ``parameters.validate_parameters``), ``excluded`` vertex indices (k,) the automatic pairs may not use
+    (or None), the ``missing`` part (N,) in [0, 1] and ``missing_faces`` (F,) bool (both None without
+    one), and the automatic pairs' ``auto_config``."""
+
+    points: np.ndarray
+    faces: np.ndarray
+    landmarks: CheckedLandmarks | None
+    options: dict
+    excluded: np.ndarray | None
+    missing: np.ndarray | None
+    missing_faces: np.ndarray | None
+    auto_config: AutoConfig
+
+
+def build_problem(points, options: dict, left=None, right=None, pair_ids=None, midline=None, left_weights=None,
+                  right_weights=None, faces=None, auto_excluded=None, auto_config=None, missing=None,
+                  missing_faces=None) -> Problem:
+    """The :class:`Problem` of these arguments (see ``filter_symblend.symmetrize``), in the order above;
+    ``options`` already validated (``parameters.validate_parameters``). Raises ParameterError or
+    LandmarkError / GeometryError naming the argument, pair or vertex at fault."""
+    points = check_points(points)
+    faces = _faces(faces, len(points))
+    excluded = _excluded_vertices(auto_excluded, len(points), options["pairs"])
+    region = _missing(missing, missing_faces, points, faces)
+    if region is not None and options["pairs"] != "landmarks":  # its pairs would pull the intact side toward it
+        excluded = np.union1d(np.zeros(0, dtype=np.int64) if excluded is None else excluded,
+                              np.flatnonzero(region[0] > 0))
+    given = left is not None or right is not None or midline is not None
+    if options["pairs"] == "auto" and given:
+        raise LandmarkError("`pairs='auto'` finds its own pairs and ignores landmarks; to use "
+                            "yours as well, pass pairs='landmarks+auto'.")
+    if options["pairs"] != "auto" and (left is None or right is None):
+        raise LandmarkError(f"`pairs='{options['pairs']}'` needs landmark pairs: pass `left` and "
+                            "`right` vertex indices, or use pairs='auto'.")
+    landmarks = None if options["pairs"] == "auto" else check_landmarks(points, left, right, pair_ids, midline,
+                                                                        left_weights, right_weights)
+    return Problem(points, faces, landmarks, options, excluded, *(region or (None, None)),
+                   auto_config or DEFAULT)
+
+
+def _excluded_vertices(auto_excluded, count: int, pairs: str) -> np.ndarray | None:
+    """``auto_excluded`` (a (count,) bool mask or vertex indices) as distinct vertex indices (k,)."""
+    if auto_excluded is None:
+        return None
+    if pairs == "landmarks":
+        raise ParameterError("`auto_excluded` keeps vertices out of the automatic pairs, and pairs='landmarks' "
+                             "finds none; use pairs='auto' or 'landmarks+auto', or leave it out.")
+    values = np.asarray(auto_excluded)
+    if values.dtype == bool:
+        if values.shape != (count,):
+            raise ParameterError(f"`auto_excluded` as a mask needs one entry per vertex ({count}), got shape "
+                                 f"{values.shape}.")
+        return np.flatnonzero(values)
+    values = values.ravel()
+    if values.size and values.dtype.kind not in "iu":
+        raise ParameterError(f"`auto_excluded` must hold integer vertex indices, got {values.dtype} values.")
+    indices = values.astype(np.int64)
+    outside = (indices < 0) | (indices >= count)
+    if outside.any():
+        raise ParameterError(f"`auto_excluded` holds vertex {indices[outside][0]}, but the mesh has vertices "
+                             f"0..{count - 1}.")
+    return np.unique(indices)
+
+
+def _faces(faces, count: int) -> np.ndarray:
+    if faces is None:
+        return np.zeros((0, 3), dtype=np.int64)
+    faces = np.asarray(faces)
+    if faces.size and (faces.ndim != 2 or faces.shape[1] != 3 or faces.dtype.kind not in "iu"):
+        raise ParameterError(f"`faces` must be an (F, 3) array of vertex indices, got shape {faces.shape} of "
+                             f"{faces.dtype}.")
+    faces = faces.reshape(-1, 3).astype(np.int64)
+    outside = (faces < 0) | (faces >= count)
+    if outside.any():
+        row = int(np.flatnonzero(outside.any(axis=1))[0])
+        raise ParameterError(f"`faces` row {row} refers to vertex {faces[outside][0]}, but there are {count} "
+                             f"vertices (0..{count - 1}).")
+    return faces
+
+
+def _missing(missing, missing_faces, points: np.ndarray, faces: np.ndarray):
+    """(missing (N,) in [0, 1], faces left out of the intact surface (F,) bool) checked, or None."""
+    if missing is None:
+        if missing_faces is not None:
+            raise ParameterError("`missing_faces` marks faces of the missing region; give `missing` too.")
+        return None
+    if len(faces) == 0:
+        raise ParameterError("`missing` vertices take the mirror shape of the intact surface, and there is none "
+                             "without faces; pass `faces`, or leave `missing` out.")
+    values = np.asarray(missing, dtype=float)
+    if values.shape != (len(points),) or not np.isfinite(values).all():
+        raise ParameterError(f"`missing` needs one finite value in [0, 1] per vertex ({len(points)}), got "
+                             f"shape {values.shape}.")
+    excluded = np.zeros(len(faces), dtype=bool) if missing_faces is None else np.asarray(missing_faces, dtype=bool)
+    if excluded.shape != (len(faces),):
+        raise ParameterError(f"`missing_faces` needs one bool per face ({len(faces)}), got shape {excluded.shape}.")
+    return np.clip(values, 0.0, 1.0), excluded
