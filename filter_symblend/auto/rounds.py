@@ -33,7 +33,6 @@ from .pairs import as_landmarks, find_pairs, spread
 from .surface import Outline, Surface, build_surface
 
 
-
 def _connected_options(points: np.ndarray, landmarks: CheckedLandmarks, options: dict) -> dict:
     """``options`` with `phi_width` raised, if needed, so that the pairs' weight graph is connected (the
     pieces of a mesh in several parts lie farther apart than the pairs on each)."""

@@ -1,14 +1,12 @@
-"""The pymeshlab face of the filter: read the pairs from the current mesh, run
-:func:`filter_symblend.symmetrize`, add the warped mesh as one new layer.
+"""The pymeshlab face of the filter: read the current mesh, its attributes and its selection into one
+validated problem (pipeline/problem), solve it, add the warped mesh as one new layer.
 
-The adapter reads the mesh, its attributes and its selection into one validated problem
-(pipeline/problem) and the result back into a layer. The input layer is never modified. The output is
-built from a copy of the input (so colours, UVs, textures and selection survive), its coordinates and
-quality set through MeshLab's own per-vertex function filters, then copied once more to drop the
-scratch attributes (pymeshlab cannot delete attributes; the
-copy drops custom attributes). The before/after checks run in a second thread
-beside the warp and the layer building. On any failure, a check's included,
-every layer the filter added is deleted and the input is current again.
+The input layer is never modified. The output is built from a copy of the input (so colours, UVs,
+textures and selection survive), its coordinates and quality set through MeshLab's own per-vertex
+function filters, then copied once more to drop the scratch attributes (pymeshlab cannot delete
+attributes; the copy drops custom attributes). The before/after checks run in a second thread beside the
+warp and the layer building. On any failure, a check's included, every layer the filter added is deleted
+and the input is current again.
 """
 
 from __future__ import annotations
