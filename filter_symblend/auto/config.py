@@ -126,8 +126,18 @@ class AutoConfig:
         "orientation terms (each scaled to the descriptors' size): equal footing")
     pair_consistency: float = _field(
         0.02, "x bounding-box diagonal",
-        "an intrinsic vertex pair is used to start a mirror field only if the map sends the twin back within "
-        "this of the vertex (twice an intrinsic map's typical error on a bent shape)")
+        "an intrinsic vertex pair is used (as a map, or to start a mirror field) only if the map sends the "
+        "twin back within this of the vertex (twice an intrinsic map's typical error on a bent shape)")
+    intrinsic_neighbours: int = _field(
+        24, "pairs",
+        "intrinsic vertex pairs each robust local map of the intrinsic mirror is fitted to: twice "
+        "local_neighbours, since up to half of them may be a vertex off (ZoomOut on a thin limb) and the "
+        "reweighting needs the right ones to outnumber any wrong ones that agree")
+    intrinsic_rounds: int = _field(
+        8, "reweighting rounds",
+        "rounds of Tukey reweighting of each robust local map of the intrinsic mirror: the pairs a vertex "
+        "off lose their weight in a few; on a cow's swung leg, where the mirror is rigid, the maps then land "
+        "within 1e-4 of the spacing of the exact twins")
     field_centres: int = _field(
         200, "kernel centres",
         "Gaussian centres of a mirror field, spread over the surface: a few per kernel width in each direction "

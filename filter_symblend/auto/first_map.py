@@ -11,12 +11,14 @@ the bend. The candidates, cheapest first:
    tessellation's own mirror grown from their vertex twins (:mod:`.connectivity`) is exact whatever
    the bend, and ends the search; so does a plain map that mirrors ``plane_suffices`` of the surface
    (a rigid pose, a scan: a non-rigid map could mirror little more, and would slide on a round shape).
-2. Otherwise each rough guess starts a smooth mirror field, registered onto the surface
-   (:mod:`.field`): the plain maps; the coherent point drift of the best plane (:mod:`.registration`:
-   a strong bend with a compression, which ICP from a plane does not reach); the shape's intrinsic
-   mirror (:mod:`.spectral`: a bend, a swung limb, which no plane follows); the drift of the second plane. They are compared
-   registered on a small sample with a coarse field; the best is registered again on more vertices
-   with finer fields.
+2. Otherwise the shape's intrinsic mirror (:mod:`.intrinsic_map`: its denoised vertex pairs and the
+   local maps between them), which follows a swung limb and a bend where no plane does, is scored as it
+   is; and each rough guess starts a smooth mirror field, registered onto the surface (:mod:`.field`):
+   the plain maps; the coherent point drift of the best plane (:mod:`.registration`: a strong bend
+   with a compression, which ICP from a plane does not reach); the intrinsic mirror; the drift of the
+   second plane. The fields are compared registered on a small sample with a coarse field; the best is
+   registered again on more vertices with finer fields, and kept unless the intrinsic mirror mirrors
+   more of the surface (a swung limb, which no smooth field follows).
 
 A shape that no map mirrors over ``min_coverage`` of its surface is refused; so is one that only a
 registered field mirrors that much, but not within ``field_precision`` of the tolerance (a field fitted
@@ -33,9 +35,9 @@ from ..errors import SymmetryNotFoundError
 from .config import AutoConfig
 from .connectivity import tessellation_mirror
 from .field import MirrorField, field_centres, refitted, register, robust_fit, robust_tolerance
-from .maps import MirrorMap, affine_map, field_map, pairs_map, plane_map
+from .intrinsic_map import intrinsic_pairs
+from .maps import MirrorMap, affine_map, field_map, pairs_map, plane_map, point_pairs_map
 from .registration import coherent_point_drift, registration_sample
-from .spectral import intrinsic_mirror, working_mesh
 from .surface import Outline, Surface
 from .twins import find_twins
 
@@ -75,20 +77,13 @@ def tessellation_map(surface: Surface, maps: list[MirrorMap], sources: np.ndarra
     return None
 
 
-def _intrinsic_pairs(surface: Surface, sample: np.ndarray, config: AutoConfig):
-    """(vertices (m,), twin positions (m, 3)) of the ``sample`` under the intrinsic mirror, only where
-    the mirror sends the twin back near the vertex; None for a point cloud or a mesh without a spectrum."""
-    if not surface.is_mesh:
+def _intrinsic_map(surface: Surface, normal: np.ndarray, config: AutoConfig) -> MirrorMap | None:
+    """The intrinsic mirror's sound pairs as a map (:mod:`.intrinsic_map`), the left side along ``normal``;
+    None for a point cloud, a mesh without a spectrum, or too few pairs to start a field."""
+    pairs = intrinsic_pairs(surface, config)
+    if pairs is None or len(pairs[0]) < config.screening_centres:
         return None
-    mesh = working_mesh(surface.points, surface.faces[surface.triangles], surface.usable, config)
-    twin = None if mesh is None else intrinsic_mirror(mesh, config)
-    if twin is None:
-        return None
-    local = mesh.vertex_of[sample]
-    sample, local = sample[local >= 0], local[local >= 0]
-    back = np.linalg.norm(mesh.points[twin[twin[local]]] - mesh.points[local], axis=1)
-    sound = back <= config.pair_consistency * surface.diagonal
-    return sample[sound], mesh.points[twin[local[sound]]]
+    return point_pairs_map(surface, *pairs, normal, config, "intrinsic mirror")
 
 
 def _drift_predictions(start: MirrorMap, x: np.ndarray, config: AutoConfig) -> np.ndarray:
@@ -101,15 +96,15 @@ def _drift_predictions(start: MirrorMap, x: np.ndarray, config: AutoConfig) -> n
     return drift(start.predict(x))
 
 
-def _starts(surface: Surface, sample: np.ndarray, ranked: list[MirrorMap], config: AutoConfig):
+def _starts(surface: Surface, sample: np.ndarray, ranked: list[MirrorMap], intrinsic: MirrorMap | None,
+            config: AutoConfig):
     """(name, vertices, twin positions) of each rough guess, cheapest first (see the module doc)."""
     x = surface.points[sample]
     for mirror in ranked:
         yield mirror.name, sample, mirror.predict(x)
     yield f"drift from the {ranked[0].name}", sample, _drift_predictions(ranked[0], x, config)
-    intrinsic = _intrinsic_pairs(surface, sample, config)
-    if intrinsic is not None and len(intrinsic[0]) >= config.screening_centres:
-        yield "intrinsic mirror", *intrinsic
+    if intrinsic is not None:
+        yield intrinsic.name, sample, intrinsic.predict(x)
     for mirror in ranked[1:2]:
         yield f"drift from the {mirror.name}", sample, _drift_predictions(mirror, x, config)
 
@@ -141,6 +136,9 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress
         return mirrored, shares, planes[0]
     if shares[ranked[0].name] >= config.plane_suffices:
         return _refuse_or(ranked[0], shares, config), shares, planes[0]
+    intrinsic = _intrinsic_map(surface, ranked[0].normal, config)
+    if intrinsic is not None:
+        shares[intrinsic.name] = coverage(intrinsic, scored, config)
     screening = _strided(surface, config.screening_samples)
     coarse = config.field_widths[0] * surface.diagonal
     centres = field_centres(surface, screening, config.screening_centres)
@@ -148,7 +146,7 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress
     # A scan (a plane mirrors most of it) stops at the first field that mirrors as much as a plane would
     # need to; the costlier starts are for shapes no plane mirrors (a strong bend).
     enough = config.plane_suffices if shares[ranked[0].name] >= config.min_coverage else config.field_suffices
-    for index, (name, vertices, twins) in enumerate(_starts(surface, screening, ranked, config)):
+    for index, (name, vertices, twins) in enumerate(_starts(surface, screening, ranked, intrinsic, config)):
         if progress is not None:
             progress(min(60.0, 8.0 * index), f"finding a mirror map: {name}")
         field = robust_fit(surface.points[vertices], twins, centres, coarse, config)
@@ -168,6 +166,8 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress
         shares[best.name] = share
     else:
         best = coarse_best
+    if intrinsic is not None and shares[intrinsic.name] > shares[best.name]:
+        best = intrinsic  # a swung limb: the pairs follow it, no smooth field does
     mirrored = tessellation_map(surface, [best], scored, config)
     if mirrored is not None:
         shares[mirrored.name] = coverage(mirrored, scored, config)

@@ -34,16 +34,24 @@ def local_maps(points: np.ndarray, partner: np.ndarray, queries: np.ndarray, pai
     """Predicted twins (m, 3) of the positions ``queries`` (m, 3) and the improper rigid part (m, 3, 3) of
     their local maps: affine maps fitted to the ``count`` nearest paired vertices ``paired`` (``tree`` holds
     their positions ``points[paired]``, ``partner`` their twins), pulled toward the best improper rigid map
-    by ``ridge`` (x the neighbourhood's spread); ``leave_out``: the queries are the paired vertices' own positions, and each map is fitted
-    without the query's own pair."""
+    by ``ridge`` (x the neighbourhood's spread); ``leave_out``: the queries are the paired vertices' own
+    positions, and each map is fitted without the query's own pair."""
     k = min(count + int(leave_out), len(paired))
     _, nearest = tree.query(queries, k=k)
     neighbours = paired[nearest.reshape(len(queries), k)[:, int(leave_out):]]
     x, y = points[neighbours], points[partner[neighbours]]
-    cx, cy = x.mean(axis=1), y.mean(axis=1)
+    return affine_mirror_maps(x, y, np.ones(x.shape[:2]), queries, ridge)
+
+
+def affine_mirror_maps(x: np.ndarray, y: np.ndarray, weights: np.ndarray, queries: np.ndarray, ridge: float):
+    """Where the weighted affine maps fitted to pairs ``x`` (m, k, 3) -> ``y`` (m, k, 3) with ``weights``
+    (m, k) put ``queries`` (m, 3), and their improper rigid parts (m, 3, 3); each map pulled toward the best
+    improper rigid map by ``ridge`` (x the neighbourhood's spread)."""
+    total = weights.sum(axis=1, keepdims=True)
+    cx, cy = np.einsum("nk,nki->ni", weights, x) / total, np.einsum("nk,nki->ni", weights, y) / total
     x, y = x - cx[:, None], y - cy[:, None]
-    cross = np.einsum("nki,nkj->nij", y, x)
-    spread = np.einsum("nki,nkj->nij", x, x)
+    cross = np.einsum("nk,nki,nkj->nij", weights, y, x)
+    spread = np.einsum("nk,nki,nkj->nij", weights, x, x)
     rigid = proper_rotation_fit(cross @ MIRROR_X) @ MIRROR_X  # best y ~ R J x, R proper
     ridge = ridge * np.trace(spread, axis1=1, axis2=2)[:, None, None] / 3.0 + 1e-300
     linear = (cross + ridge * rigid) @ np.linalg.inv(spread + ridge * np.eye(3))

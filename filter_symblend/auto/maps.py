@@ -83,14 +83,23 @@ def pairs_map(surface: Surface, partner: np.ndarray, normal: np.ndarray, config:
     """The mirror map of known vertex pairs ``partner`` (N,) (twin index, -1 unpaired), between them: at
     each position the local affine map of the nearest pairs (see :mod:`.growth`)."""
     paired = np.flatnonzero(partner >= 0)
-    tree = cKDTree(surface.points[paired])
+    return point_pairs_map(surface, surface.points[paired], surface.points[partner[paired]], normal, config, name)
 
-    def predict(x: np.ndarray) -> np.ndarray:
-        return local_maps(surface.points, partner, x, paired, tree, config.local_neighbours, config.growth_ridge)[0]
 
-    def carry(normals: np.ndarray, positions: np.ndarray) -> np.ndarray:
-        rigid = local_maps(surface.points, partner, positions, paired, tree, config.local_neighbours,
-                           config.growth_ridge)[1]
+def point_pairs_map(surface: Surface, x: np.ndarray, y: np.ndarray, normal: np.ndarray, config: AutoConfig,
+                    name: str) -> MirrorMap:
+    """The mirror map of known point pairs, ``x`` (m, 3) to ``y`` (m, 3) (both directions listed), between
+    them: at each position the local affine map of the nearest pairs (see :mod:`.growth`)."""
+    positions = np.vstack([x, y])
+    partner = np.arange(len(x), 2 * len(x))
+    paired = np.arange(len(x))
+    tree = cKDTree(x)
+
+    def predict(queries: np.ndarray) -> np.ndarray:
+        return local_maps(positions, partner, queries, paired, tree, config.local_neighbours, config.growth_ridge)[0]
+
+    def carry(normals: np.ndarray, queries: np.ndarray) -> np.ndarray:
+        rigid = local_maps(positions, partner, queries, paired, tree, config.local_neighbours, config.growth_ridge)[1]
         return normalize(np.einsum("nij,nj->ni", rigid, normals))  # an improper rotation is its inverse transpose
 
     normal = normalize(np.asarray(normal, dtype=float))

@@ -33,7 +33,6 @@ from ..core.symmetrize import CheckedLandmarks, check_landmarks
 from ..errors import GeometryError
 from .config import AutoConfig
 from .connectivity import ring_consistent, tessellation_mirror
-from .field import robust_tolerance
 from .growth import grow_and_prune
 from .maps import MirrorMap
 from .surface import Surface
@@ -78,8 +77,10 @@ def find_pairs(mirror: MirrorMap, geometry: Surface, sources: np.ndarray, fixed:
     if not covered.any():
         raise GeometryError("Automatic pairing found no vertex whose mirror image lies on the surface.")
     floor = config.coincident * surface.diagonal
-    precision = robust_tolerance(twins.landing[covered], config, floor)
-    seeds = twins.exact_vertex(config, precision) & covered & ~forbidden[twins.vertex]
+    # Seeds within vertex_precision of the local spacing, with no bound from the map's precision over the
+    # whole surface: that varies (exact on a cow's body, 1e-5 of the spacing on its swung leg under the
+    # intrinsic map), and the growth, the prune and the vertex share verify every seed.
+    seeds = twins.exact_vertex(config) & covered & ~forbidden[twins.vertex]
     beyond_chance = seeds & (surface.chance_ratio(twins.ratio) <= config.ratio)
     info = {"map": mirror.name, "twins": float(np.mean(covered)),
             "consistency": float(np.count_nonzero(covered) / max(np.count_nonzero(landed), 1)),

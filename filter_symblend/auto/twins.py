@@ -46,9 +46,9 @@ class Twins:
         """(m,) bool: sources with a sound twin landing within ``tolerance`` (mesh units)."""
         return self.sound & (self.landing <= tolerance)
 
-    def exact_vertex(self, config: AutoConfig, tolerance: float, strict: bool = True) -> np.ndarray:
+    def exact_vertex(self, config: AutoConfig, tolerance: float = np.inf, strict: bool = True) -> np.ndarray:
         """(m,) bool: sources whose twin is a vertex: the nearest vertex to the prediction, within
-        ``tolerance`` of it (mesh units: the map's precision) and, if ``strict``, within ``vertex_precision``
+        ``tolerance`` of it (mesh units: the map's precision, if known) and, if ``strict``, within ``vertex_precision``
         of the local spacing, unambiguous and mutual (a source can be its own twin, on the midline). Not
         strict: seeds for a growth that proves them (:mod:`.connectivity`)."""
         bound = np.minimum(tolerance, config.vertex_precision * self.spacing) if strict else tolerance
