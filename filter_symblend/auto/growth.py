@@ -30,17 +30,17 @@ from .config import AutoConfig
 from .surface import Surface
 
 def local_maps(points: np.ndarray, partner: np.ndarray, queries: np.ndarray, paired: np.ndarray,
-               tree: cKDTree, count: int, ridge: float, leave_out: bool = False):
+               tree: cKDTree, config: AutoConfig, leave_out: bool = False):
     """Predicted twins (m, 3) of the positions ``queries`` (m, 3) and the improper rigid part (m, 3, 3) of
-    their local maps: affine maps fitted to the ``count`` nearest paired vertices ``paired`` (``tree`` holds
-    their positions ``points[paired]``, ``partner`` their twins), pulled toward the best improper rigid map
-    by ``ridge`` (x the neighbourhood's spread); ``leave_out``: the queries are the paired vertices' own
-    positions, and each map is fitted without the query's own pair."""
-    k = min(count + int(leave_out), len(paired))
+    their local maps: affine maps fitted to the ``config.local_neighbours`` nearest paired vertices ``paired``
+    (``tree`` holds their positions ``points[paired]``, ``partner`` their twins), pulled toward the best
+    improper rigid map by ``config.growth_ridge`` (x the neighbourhood's spread); ``leave_out``: the queries
+    are the paired vertices' own positions, and each map is fitted without the query's own pair."""
+    k = min(config.local_neighbours + int(leave_out), len(paired))
     _, nearest = tree.query(queries, k=k)
     neighbours = paired[nearest.reshape(len(queries), k)[:, int(leave_out):]]
     x, y = points[neighbours], points[partner[neighbours]]
-    return affine_mirror_maps(x, y, np.ones(x.shape[:2]), queries, ridge)
+    return affine_mirror_maps(x, y, np.ones(x.shape[:2]), queries, config.growth_ridge)
 
 
 def affine_mirror_maps(x: np.ndarray, y: np.ndarray, weights: np.ndarray, queries: np.ndarray, ridge: float):
@@ -85,12 +85,10 @@ def grow(surface: Surface, partner: np.ndarray, eligible: np.ndarray, twins: np.
         sources = unpaired[np.isfinite(gap)]
         if not len(sources):
             return waves
-        predicted, rigid = local_maps(points, partner, points[sources], paired, tree, config.local_neighbours,
-                                      config.growth_ridge)
+        predicted, rigid = local_maps(points, partner, points[sources], paired, tree, config)
 
         def back(vertices):
-            return surface.nearest_vertices(local_maps(points, partner, points[vertices], paired, tree,
-                                                       config.local_neighbours, config.growth_ridge)[0])[0]
+            return surface.nearest_vertices(local_maps(points, partner, points[vertices], paired, tree, config)[0])[0]
 
         ok, vertex = _accepted(surface, sources, predicted, rigid, back, config)
         ok &= (partner[vertex] < 0) & twins[vertex]
@@ -110,8 +108,8 @@ def prune(surface: Surface, partner: np.ndarray, fixed: np.ndarray, config: Auto
     if len(paired) <= config.local_neighbours:
         return wrong
     tree = cKDTree(surface.points[paired])
-    predicted, rigid = local_maps(surface.points, partner, surface.points[paired], paired, tree,
-                                  config.local_neighbours, config.growth_ridge, leave_out=True)
+    predicted, rigid = local_maps(surface.points, partner, surface.points[paired], paired, tree, config,
+                                  leave_out=True)
     misfit = np.linalg.norm(predicted - surface.points[partner[paired]], axis=1)
     # The neighbouring pairs' own misfits, midline points left out: a row of vertices just off the
     # midline, each wrongly its own twin, would vouch for one another.
@@ -134,11 +132,12 @@ def prune(surface: Surface, partner: np.ndarray, fixed: np.ndarray, config: Auto
 
 
 def grow_and_prune(space: Surface, geometry: Surface, partner: np.ndarray, eligible: np.ndarray,
-                   twins: np.ndarray, fixed: np.ndarray, config: AutoConfig, floor: float) -> dict:
+                   twins: np.ndarray, fixed: np.ndarray, config: AutoConfig) -> dict:
     """:func:`prune` the seeds in ``partner`` on ``geometry`` (the input), :func:`grow` in ``space`` (where
     the map predicts: the input, or a symmetrized output; ``eligible`` (N,) bool vertices, with ``twins``
     (N,) bool ones), prune again, and grow again without what was dropped, until nothing changes (at most
-    ``config.growth_passes``)."""
+    ``config.growth_passes``). The least precision the prune asks is ``config.coincident`` x the diagonal."""
+    floor = config.coincident * space.diagonal
     dropped = np.zeros(len(partner), dtype=bool)
     waves = 0
     for _ in range(config.growth_passes):

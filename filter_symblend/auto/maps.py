@@ -96,10 +96,10 @@ def point_pairs_map(surface: Surface, x: np.ndarray, y: np.ndarray, normal: np.n
     tree = cKDTree(x)
 
     def predict(queries: np.ndarray) -> np.ndarray:
-        return local_maps(positions, partner, queries, paired, tree, config.local_neighbours, config.growth_ridge)[0]
+        return local_maps(positions, partner, queries, paired, tree, config)[0]
 
     def carry(normals: np.ndarray, queries: np.ndarray) -> np.ndarray:
-        rigid = local_maps(positions, partner, queries, paired, tree, config.local_neighbours, config.growth_ridge)[1]
+        rigid = local_maps(positions, partner, queries, paired, tree, config)[1]
         return normalize(np.einsum("nij,nj->ni", rigid, normals))  # an improper rotation is its inverse transpose
 
     normal = normalize(np.asarray(normal, dtype=float))

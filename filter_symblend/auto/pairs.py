@@ -53,6 +53,18 @@ class AutomaticPairs:
     info: dict
 
 
+@dataclasses.dataclass(frozen=True)
+class Constraints:
+    """What every round's pairs obey: checked on ``geometry`` (the input surface), anchored by ``fixed`` (the
+    user's landmarks, or None), none on or toward a ``forbidden`` (N,) bool vertex (a landmark, an excluded
+    part), by the thresholds of ``config``."""
+
+    geometry: Surface
+    fixed: CheckedLandmarks | None
+    forbidden: np.ndarray
+    config: AutoConfig
+
+
 def spread(points: np.ndarray, vertices: np.ndarray, count: int) -> np.ndarray:
     """At most about ``count`` of ``vertices`` spread evenly (one per cell of a voxel grid), in order."""
     if len(vertices) <= count:
@@ -62,21 +74,19 @@ def spread(points: np.ndarray, vertices: np.ndarray, count: int) -> np.ndarray:
     return vertices[np.sort(first)]
 
 
-def find_pairs(mirror: MirrorMap, geometry: Surface, sources: np.ndarray, fixed: CheckedLandmarks | None,
-               forbidden: np.ndarray, count: int, config: AutoConfig, exact: bool | None = None) -> AutomaticPairs:
+def find_pairs(mirror: MirrorMap, sources: np.ndarray, count: int, constraints: Constraints,
+               exact: bool | None = None) -> AutomaticPairs:
     """About ``count`` pairs under ``mirror`` for ``sources`` (sorted vertex indices; see the module doc),
-    checked on ``geometry`` (the input); none on or toward a ``forbidden`` (N,) vertex (a landmark, an
-    excluded part). ``fixed``: the user's landmarks, anchors of the growth. ``exact``: whether the twins are
+    under the round's ``constraints``. ``exact``: whether the twins are
     to be exact vertices; None: decided here, by the share of the twins that are (on a symmetrized output the
     pairs it was made from always are, so the later rounds pass the first round's answer)."""
-    surface = mirror.surface
-    tolerance = config.landing_tolerance * geometry.diagonal
+    surface, config, forbidden = mirror.surface, constraints.config, constraints.forbidden
+    tolerance = config.landing_tolerance * constraints.geometry.diagonal
     twins = find_twins(mirror, sources, tolerance)
     landed = twins.landing <= tolerance
     covered = twins.covered(tolerance) & ~forbidden[twins.corners].any(axis=1)
     if not covered.any():
         raise GeometryError("Automatic pairing found no vertex whose mirror image lies on the surface.")
-    floor = config.coincident * surface.diagonal
     # Seeds within vertex_precision of the local spacing, with no bound from the map's precision over the
     # whole surface: that varies (exact on a cow's body, 1e-5 of the spacing on its swung leg under the
     # intrinsic map), and the growth, the prune and the vertex share verify every seed.
@@ -88,7 +98,7 @@ def find_pairs(mirror: MirrorMap, geometry: Surface, sources: np.ndarray, fixed:
     if exact is not False and (exact or np.count_nonzero(seeds) > config.local_neighbours):
         # Vertex twins, perhaps: the growth from them proves it by pairing most of the vertices, which it
         # cannot do on two sides sampled independently (their vertices miss each other's local maps).
-        found = _exact_pairs(mirror, geometry, sources, twins, seeds, fixed, forbidden, count, config, floor, info)
+        found = _exact_pairs(mirror, sources, twins, seeds, count, constraints, info)
         if exact or found.info["vertex_share"] >= config.vertex_share:
             return found
     usable = covered & ~forbidden[sources]
@@ -112,13 +122,15 @@ def _point_pairs(surface: Surface, sources: np.ndarray, twins, rows: np.ndarray)
             pick(twins.corners[rows], own_corners), pick(twins.weights[rows], own_weights), midline)
 
 
-def _exact_pairs(mirror, geometry, sources, twins, exact_twins, fixed, forbidden, count, config, floor, info):
+def _exact_pairs(mirror: MirrorMap, sources: np.ndarray, twins, exact_twins: np.ndarray, count: int,
+                 constraints: Constraints, info: dict) -> AutomaticPairs:
     """Exact vertex pairs grown from the exact twins (see the module doc); ``info`` gains what the growth
     did and ``vertex_share``, the share of the usable vertices it paired. Where the growth does not reach
     (the tip of a horn) nothing is paired: the map's twin points there would carry its tangential error
     into the solve (on a bent cow, 3x the symmetry error of leaving them to the warp)."""
     info = dict(info)
-    surface = mirror.surface
+    surface, geometry, config = mirror.surface, constraints.geometry, constraints.config
+    fixed, forbidden = constraints.fixed, constraints.forbidden
     n = len(surface.points)
     index = np.arange(n)
     partner = np.full(n, -1)
@@ -128,7 +140,7 @@ def _exact_pairs(mirror, geometry, sources, twins, exact_twins, fixed, forbidden
     in_sample = np.zeros(n, dtype=bool)
     in_sample[sources] = True
     info.update(grow_and_prune(surface, geometry, partner, in_sample & ~forbidden, surface.usable & ~forbidden,
-                               forbidden, config, floor))
+                               forbidden, config))
     if surface.is_mesh:
         mirrored = tessellation_mirror(surface.adjacency, partner, surface.usable & ~forbidden, config)
         info["tessellation_mirror"] = mirrored is not None
@@ -140,7 +152,7 @@ def _exact_pairs(mirror, geometry, sources, twins, exact_twins, fixed, forbidden
             partner[:] = np.where(whole, mirrored, -1)
             _hold_landmarks(partner, fixed)
             info.update(grow_and_prune(surface, geometry, partner, in_sample & ~forbidden,
-                                       surface.usable & ~forbidden, forbidden | whole, config, floor))
+                                       surface.usable & ~forbidden, forbidden | whole, config))
     automatic = (partner >= 0) & ~forbidden
     info["vertex_share"] = float(np.count_nonzero(automatic & surface.usable) /
                                  max(np.count_nonzero(surface.usable & ~forbidden), 1))

@@ -29,7 +29,7 @@ from .config import DEFAULT, AutoConfig
 from .field import MirrorField, field_centres, register
 from .first_map import coverage, first_map
 from .maps import MirrorMap, field_map, plane_map
-from .pairs import as_landmarks, find_pairs, spread
+from .pairs import Constraints, as_landmarks, find_pairs, spread
 from .surface import Outline, Surface, build_surface
 
 
@@ -107,10 +107,11 @@ def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, l
     count = options["auto_pair_count"]
     round_count = min(count, config.round_pairs)
     exact_twins = None  # decided by the first round
+    constraints = Constraints(surface, landmarks, forbidden, config)
 
     def attempt(mirror: MirrorMap, pairs_wanted: int, start: float):
         nonlocal exact_twins
-        pairs = find_pairs(mirror, surface, sample, landmarks, forbidden, pairs_wanted, config, exact_twins)
+        pairs = find_pairs(mirror, sample, pairs_wanted, constraints, exact_twins)
         exact_twins = pairs.info["twins_are"] == "exact vertices"
         solved, checked = as_landmarks(points, pairs, landmarks, options["landmark_priority"], config.coincident)
         solve_options = _connected_options(solved, checked, core)

@@ -29,9 +29,12 @@ def _plane_frame(points: np.ndarray, normal) -> np.ndarray:
     return np.vstack([normal, axes[0], np.cross(normal, axes[0])])
 
 
-def _draw(axis, points, faces, values, frame, view_axis, norm, colormap):
+def _draw(axis, mesh: dict, frame: np.ndarray, view_axis: int, colours) -> None:
+    """``mesh`` (``points``, ``faces``, ``per_vertex``) seen along row ``view_axis`` of ``frame`` (3, 3), each
+    triangle coloured by ``colours`` (values -> RGBA) of its corners' mean value."""
     from matplotlib.collections import PolyCollection
 
+    points, faces, values = mesh["points"], mesh["faces"], mesh["per_vertex"]
     local = (points - points.mean(axis=0)) @ frame.T
     screen = [i for i in range(3) if i != view_axis]
     triangles = local[faces]
@@ -40,8 +43,8 @@ def _draw(axis, points, faces, values, frame, view_axis, norm, colormap):
     order = np.argsort(depth)
     order = order[facing[order]] if facing.any() else order
     polygons = triangles[order][:, :, screen]
-    colours = colormap(norm(values[faces[order]].mean(axis=1)))
-    axis.add_collection(PolyCollection(polygons, facecolors=colours, edgecolors=colours, linewidths=0.3))
+    shades = colours(values[faces[order]].mean(axis=1))
+    axis.add_collection(PolyCollection(polygons, facecolors=shades, edgecolors=shades, linewidths=0.3))
     axis.set_xlim(local[:, screen[0]].min(), local[:, screen[0]].max())
     axis.set_ylim(local[:, screen[1]].min(), local[:, screen[1]].max())
     axis.set_aspect("equal")
@@ -71,8 +74,7 @@ def render_comparison(path, before: dict, after: dict, titles=("before", "after"
     frame = _plane_frame(after["points"], after["plane_normal"])  # one frame: the same views of both
     for row, (mesh, title) in enumerate(zip((before, after), titles)):
         for column, (view, view_axis) in enumerate(VIEWS):
-            _draw(axes[row, column], mesh["points"], mesh["faces"], mesh["per_vertex"], frame, view_axis,
-                  norm, colormap)
+            _draw(axes[row, column], mesh, frame, view_axis, lambda values: colormap(norm(values)))
             figures = f"\np90 {mesh['p90_relative']:.3%} of the diagonal, RMS {mesh['rms']:.3g}"
             axes[row, column].set_title(f"{title}\n{view}" + (figures if column == 0 else ""), fontsize=9, wrap=True)
     bar = figure.colorbar(matplotlib.cm.ScalarMappable(norm, colormap), ax=axes, shrink=0.6, orientation="horizontal")

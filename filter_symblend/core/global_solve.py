@@ -167,6 +167,7 @@ def global_solve(
     right: np.ndarray,
     local: LocalSymmetries,
     alpha: float,
+    *,
     left_weights: np.ndarray | None = None,
     right_weights: np.ndarray | None = None,
     on_plane: np.ndarray | None = None,

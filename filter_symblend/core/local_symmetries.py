@@ -114,13 +114,15 @@ def _symmetrize(m: np.ndarray) -> np.ndarray:
     return m + np.swapaxes(m, 1, 2)
 
 
-def _fit_quality(moments, left, right, left_centre, right_centre, normals, m_left, m_right):
+def _fit_quality(moments, left, right, centres, normals, transforms):
     """Mirror residuals after the local transform, relative to the neighbourhood's RMS radius.
 
     Returns (neighbourhood (n,), pair (n,)): the RMS of |M_p p' - U M_q q'| over
     the theta-weighted neighbourhood, and the same for the pair's own landmarks,
-    where U mirrors across n_i and p', q' are taken about the local centres.
+    where U mirrors across n_i and p', q' are taken about the local ``centres`` (left (n, 3), right
+    (n, 3)); ``transforms``: (M_p, M_q), each (n, 3, 3).
     """
+    (left_centre, right_centre), (m_left, m_right) = centres, transforms
     cpp, cqq, kpq = moments.centred(left_centre, right_centre)
     mirror = np.eye(3) - 2.0 * normals[:, :, None] * normals[:, None, :]
     gram_l = np.swapaxes(m_left, 1, 2) @ m_left
@@ -229,7 +231,7 @@ def local_symmetries(
                        - np.einsum("nij,nj->ni", m_left, moments.left_mean))
     normals = normals * np.where(np.einsum("ni,ni->n", normals, transformed_gap) < 0,
                                  -1.0, 1.0)[:, None]
-    residuals, misfits = _fit_quality(moments, left, right, left_centre, right_centre, normals,
-                                      m_left, m_right)
+    residuals, misfits = _fit_quality(moments, left, right, (left_centre, right_centre), normals,
+                                      (m_left, m_right))
     return LocalSymmetries(normals, np.ascontiguousarray(m_left), np.ascontiguousarray(m_right),
                            np.ascontiguousarray(m_gap), residuals, misfits, stretch, point_refl)

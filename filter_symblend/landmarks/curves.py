@@ -65,7 +65,7 @@ def find_curves(names: list[str], left_words=LEFT_WORDS, right_words=RIGHT_WORDS
 
 
 def add_curve_pairs(snapped: SnappedPairs, points: np.ndarray, faces: np.ndarray, landmarks: LandmarkSet,
-                    curves: list[NamedCurve], spacing: float | None = None, source: str = "landmarks",
+                    curves: list[NamedCurve], *, spacing: float | None = None, source: str = "landmarks",
                     allow_far: bool = False) -> SnappedPairs:
     """``snapped`` with every curve resampled about ``spacing`` apart (mesh units; default 1 % of
     the diagonal) into pairs (or midline landmarks), after its single landmarks.

@@ -96,6 +96,6 @@ def pairs_from_landmark_file(points: np.ndarray, faces: np.ndarray | None, path:
     faces = np.zeros((0, 3), dtype=np.int64) if faces is None else np.asarray(faces)
     snapped = snap_pairs(points, landmarks, index_pairs, unpaired, midline=midline, source=source,
                          allow_far=allow_far)
-    snapped = add_curve_pairs(snapped, points, faces, landmarks, found_curves, curve_spacing, source,
+    snapped = add_curve_pairs(snapped, points, faces, landmarks, found_curves, spacing=curve_spacing, source=source,
                               allow_far=allow_far)
     return dataclasses.replace(snapped, frame_note=frame_note, pairing=pairing)
