@@ -66,6 +66,13 @@ def robust_tolerance(values: np.ndarray, config: AutoConfig, floor: float) -> fl
     return max(config.robust_sigmas * 1.4826 * float(np.median(values)), floor) if len(values) else floor
 
 
+def tukey_weights(misfit: np.ndarray, config: AutoConfig, floor: float) -> np.ndarray:
+    """Tukey's biweight of ``misfit`` (..., k): zero beyond ``robust_sigmas`` robust deviations of the misfits
+    along the last axis (the bound at least ``floor``)."""
+    bound = np.maximum(config.robust_sigmas * 1.4826 * np.median(misfit, axis=-1, keepdims=True), floor)
+    return (1.0 - np.minimum(misfit / bound, 1.0) ** 2) ** 2
+
+
 def _ridge_solve(matrix: np.ndarray, right: np.ndarray, ridge: float) -> np.ndarray:
     size = len(matrix)
     return np.linalg.solve(matrix + ridge * np.trace(matrix) / size * np.eye(size), right)
@@ -102,9 +109,7 @@ def robust_fit(x: np.ndarray, y: np.ndarray, centres: np.ndarray, width: float, 
     weights = np.ones(len(x))
     for _ in range(config.robust_rounds):
         fit_to_pairs(field, x, y, weights, config.field_ridge)
-        misfit = np.linalg.norm(field(x) - y, axis=1)
-        scaled = misfit / robust_tolerance(misfit, config, 1e-300)
-        weights = (1.0 - np.minimum(scaled, 1.0) ** 2) ** 2  # Tukey: zero beyond the bound
+        weights = tukey_weights(np.linalg.norm(field(x) - y, axis=1), config, 1e-300)
     return field
 
 

@@ -25,6 +25,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .config import AutoConfig
+from .field import tukey_weights
 from .growth import affine_mirror_maps
 from .spectral import intrinsic_mirror, working_mesh
 from .surface import Surface
@@ -43,9 +44,7 @@ def robust_twins(x: np.ndarray, y: np.ndarray, config: AutoConfig) -> np.ndarray
     for _ in range(config.intrinsic_rounds):
         predicted, _ = affine_mirror_maps(x[neighbours], y[neighbours], weights, x, config.growth_ridge)
         residual = np.linalg.norm(predicted - y, axis=1)[neighbours]
-        # Tukey's biweight, cut at robust_sigmas robust deviations of the neighbours' residuals
-        cut = config.robust_sigmas * 1.4826 * np.median(residual, axis=1, keepdims=True) + 1e-12 * np.ptp(x)
-        tukey = np.clip(1.0 - (residual / cut) ** 2, 0.0, None) ** 2
+        tukey = tukey_weights(residual, config, 1e-12 * np.ptp(x))  # per row: the neighbours' residuals
         enough = np.count_nonzero(tukey, axis=1) >= MINIMUM_PAIRS
         weights[enough] = tukey[enough]
     return affine_mirror_maps(x[neighbours], y[neighbours], weights, x, config.growth_ridge)[0]
