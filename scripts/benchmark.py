@@ -18,11 +18,15 @@ Seconds are the filter's own stage timings (median of --repeat runs).
                                              # samples, as given and deformed; synthetic meshes as they come
     python scripts/benchmark.py --filter     # what the user runs: the MeshSet filter against its core, and
                                              # `symblend report`, each in its own process (time, peak RSS)
+    python scripts/benchmark.py --mirror-maps [--quick | --all-shapes] [--bcicp PATH] [--no-pyfm]
+                                             # the automatic pairs' mirror map against the ground-truth
+                                             # self-symmetry of FAUST and TOSCA (BCICP dataset), pyFM beside it
     python scripts/benchmark.py --batch      # `symblend batch` on 16 specimens of about 30k vertices: 1 and 2
                                              # local workers, and a local Dask cluster
     python scripts/benchmark_dense.py        # dense pairs: the stages, the warp against the dense spline
 
-Each section is a module of scripts/benchmarks/ (accuracy, scale, automatic, corpus, whole_filter, batch) on the
+Each section is a module of scripts/benchmarks/ (accuracy, scale, automatic, corpus, whole_filter, batch,
+mirror_maps) on the
 package's own helpers; this script only parses the options and runs one.
 """
 
@@ -33,7 +37,7 @@ import warnings
 
 from filter_symblend import SymblendWarning
 
-from benchmarks import accuracy, automatic, batch, corpus, scale, whole_filter  # scripts/ is on sys.path
+from benchmarks import accuracy, automatic, batch, corpus, mirror_maps, scale, whole_filter  # scripts/ is on sys.path
 from benchmarks.common import MESHES
 
 
@@ -47,6 +51,13 @@ def main(argv=None) -> None:
     parser.add_argument("--corpus", action="store_true", help="automatic pairs over every corpus mesh")
     parser.add_argument("--filter", action="store_true", help="the MeshSet filter against its core; symblend report")
     parser.add_argument("--batch", action="store_true", help="symblend batch: 1 and 2 workers, a local Dask cluster")
+    parser.add_argument("--mirror-maps", action="store_true",
+                        help="the mirror map against the BCICP dataset's ground-truth self-symmetry")
+    parser.add_argument("--quick", action="store_true", help="--mirror-maps: six shapes (about 2 minutes)")
+    parser.add_argument("--all-shapes", action="store_true", help="--mirror-maps: every FAUST and TOSCA shape")
+    parser.add_argument("--bcicp", help="--mirror-maps: the dataset (a git snapshot or an unpacked copy)")
+    parser.add_argument("--no-pyfm", action="store_true", help="--mirror-maps: leave out the pyFM baseline")
+    parser.add_argument("--mode", default="articulated", help="--mirror-maps: the filter's mode")
     parser.add_argument("--filter-row", nargs=3, metavar=("MESH", "PAIRS", "CHECKS"), help=argparse.SUPPRESS)
     parser.add_argument("--levels", type=int, default=4, help="--scale: subdivisions of the cow (4: 743k vertices)")
     parser.add_argument("--scale-pairs", type=int, nargs="+", default=[100, 1000, 10000, 100000])
@@ -59,6 +70,9 @@ def main(argv=None) -> None:
         return
     if args.corpus:
         corpus.corpus_main()
+        return
+    if args.mirror_maps:
+        mirror_maps.mirror_maps_main(args)
         return
     if args.filter_row:
         whole_filter.filter_row(args.filter_row[0], int(args.filter_row[1]), args.filter_row[2])

@@ -147,6 +147,10 @@ def test_ascii_ply_properties(tmp_path):
                     "property float z\nproperty double symblend_pair\nelement face 0\n"
                     "property list uchar int vertex_indices\nend_header\n0 0 0 1\n1 0 0 -1\n")
     assert read_ply_vertex_properties(path)["symblend_pair"].tolist() == [1.0, -1.0]
+    path.write_text("ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty list uchar double twin\n"
+                    "property float q\nend_header\n0 3 1 2 3 7\n1 3 4 5 6 8\n")
+    properties = read_ply_vertex_properties(path)
+    assert properties["twin"].tolist() == [[1, 2, 3], [4, 5, 6]] and properties["q"].tolist() == [7, 8]
 
 
 def test_midline_and_missing_options(tmp_path, bent_cow_files, cow):
@@ -195,8 +199,11 @@ def test_unreadable_mesh_unwritable_output_and_side_words(tmp_path, bent_cow_fil
     (b"ply\nformat ascii 1.0\nelement vertex 1\n", r"has no end_header line"),
     (b"ply\nformat ascii 1.0\nelement face 0\nelement vertex 1\nproperty float x\nend_header\n",
      r"the vertex element must come first"),
-    (b"ply\nformat ascii 1.0\nelement vertex 1\nproperty list uchar int x\nend_header\n",
-     r"list properties on vertices are not supported"),
+    (b"ply\nformat ascii 1.0\nelement vertex 2\nproperty list uchar int x\nend_header\n1 5 0\n2 5 6\n",
+     r"the vertex property 'x' is a list of varying length; only lists of one length"),
+    (b"ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty list uchar int x\nend_header\n"
+     + bytes([1]) + (5).to_bytes(4, "little") + bytes([2]) + (5).to_bytes(4, "little") + (6).to_bytes(4, "little"),
+     r"the vertex property 'x' is a list of varying length; only lists of one length"),
     (b"ply\nformat binary_middle_endian 1.0\nelement vertex 1\nproperty float x\nend_header\n",
      r"unknown PLY format 'binary_middle_endian'"),
 ])

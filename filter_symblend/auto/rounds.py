@@ -27,6 +27,7 @@ from ..errors import DegenerateNeighbourhoodError, GeometryError
 from ..parameters import CORE, options_of
 from .config import DEFAULT, AutoConfig
 from .field import MirrorField, field_centres, register
+from .confidence import mirror_pairs
 from .first_map import coverage, first_map
 from .maps import MirrorMap, field_map, plane_map
 from .pairs import Constraints, as_landmarks, find_pairs, spread
@@ -165,11 +166,14 @@ def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, l
         entry["final"] = True
         history.append(entry)
     if progress is not None:
+        progress(98.0, "every vertex's twin, with its confidence")
+    twins = mirror_pairs(source, surface, forbidden, config)
+    if progress is not None:
         progress(100.0, "done")
-    return _final(points, surface.representative, result, landmarks, report, stopped, clock)
+    return _final(points, surface.representative, result, landmarks, report, stopped, clock, twins)
 
 
-def _final(points, representative, result, landmarks, report, stopped, clock) -> SymmetrizationResult:
+def _final(points, representative, result, landmarks, report, stopped, clock, twins) -> SymmetrizationResult:
     """The result cut back to the input's vertices (each duplicate where its first copy went), with the
     automatic pairs' report."""
     final = result.report
@@ -179,7 +183,7 @@ def _final(points, representative, result, landmarks, report, stopped, clock) ->
     report.update(stopped=stopped, pair_count=int(final["pair_count"] - user_pairs),
                   midline_count=int(final["midline_count"] - user_midline),
                   twins_are=kept[-1]["twins_are"] if kept else None,
-                  consistency=kept[-1]["consistency"] if kept else None)
+                  consistency=kept[-1]["consistency"] if kept else None, mirror_map=twins.report)
     out = {**final, "pair_count": user_pairs, "midline_count": user_midline, "auto_pairs": report}
     if landmarks is None:
         out.pop("landmark_asymmetry_before")
@@ -194,4 +198,4 @@ def _final(points, representative, result, landmarks, report, stopped, clock) ->
     if not np.isfinite(points_out).all():
         raise GeometryError("The automatic pairs gave a non-finite output (a singular system went undetected); "
                             "please report this mesh.")
-    return SymmetrizationResult(points_out, np.linalg.norm(points_out - points, axis=1), out)
+    return SymmetrizationResult(points_out, np.linalg.norm(points_out - points, axis=1), out, twins)

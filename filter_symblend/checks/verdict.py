@@ -34,7 +34,11 @@ def result_warnings(before: dict, after: dict, hausdorff: dict | None = None, di
                         f"{_percent(before['p99_relative'])} of its diagonal (99th percentile){moved}.")
         return messages
     if after["p90"] > (1 + WORSE_MARGIN) * before["p90"]:
-        if landmark_pairs is not None and landmark_pairs < SPARSE_PAIRS and not automatic:
+        if automatic and not landmark_pairs:
+            fix = ("the automatic pairs mirror the wrong parts here: write them with `symblend pairs MESH -o "
+                   "pairs.pp`, check and correct them in PickPoints (or place landmark pairs), then symmetrize "
+                   "with -l pairs.pp")
+        elif landmark_pairs is not None and landmark_pairs < SPARSE_PAIRS and not automatic:
             fix = (f"with {landmark_pairs} landmark pairs, add dense pairs from the surface: --pairs landmarks+auto "
                    "(pairs=\"landmarks+auto\" in Python)")
         else:

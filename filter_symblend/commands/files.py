@@ -123,11 +123,12 @@ def load_mesh(path: pathlib.Path, ms: pymeshlab.MeshSet | None = None) -> pymesh
 
 def save_atomically(ms: pymeshlab.MeshSet, output: pathlib.Path) -> None:
     """Save the current mesh to a temporary name beside ``output``, then rename it. A PLY keeps
-    quality and every custom per-vertex scalar attribute."""
+    quality and every custom per-vertex attribute (scalars, and points such as the automatic pairs' twins)."""
     options = {}
     if output.suffix.lower() == ".ply":
-        options = {"save_vertex_quality": True,
-                   **{f"__ca_vs__{name}": True for name in custom_attribute_names(ms)["vs"]}}
+        names = custom_attribute_names(ms)
+        options = {"save_vertex_quality": True, **{f"__ca_{kind}__{name}": True for kind in ("vs", "vp")
+                                                   for name in names[kind]}}
     try:
         with replaced_when_done(output) as temporary:
             ms.save_current_mesh(str(temporary), **options)

@@ -8,11 +8,11 @@ import sys
 import warnings
 
 from ..errors import SymblendError, SymblendWarning
-from . import batch, landmark_files, mlx, report, symmetrize
+from . import batch, landmark_files, mirror_pairs, mlx, report, symmetrize
 from .console import Parser, one_line, show_warning
 
 DESCRIPTION = ("The symblend command: symmetrize a mesh from a landmark file or a whole study, run filter scripts, "
-               "compare before and after, check and convert landmarks.")
+               "compare before and after, check and convert landmarks, write automatic pairs to check.")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -26,7 +26,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = Parser(prog="symblend", description=DESCRIPTION)
     parser.add_argument("--version", action="version", version=f"symblend (filter-symblend) {installed}")
     commands = parser.add_subparsers(dest="command", required=True)
-    for command in (symmetrize, batch, mlx, report, landmark_files):
+    for command in (symmetrize, mirror_pairs, batch, mlx, report, landmark_files):
         command.register(commands)
     return parser
 

@@ -15,6 +15,7 @@ from .geometry import flat_normal, minimal_rotation, normalize, rigid_fit
 from .global_solve import MINUS_X, global_solve
 from .landmark_asymmetry import fit_mirror_plane
 from .landmark_pairs import LandmarkPairs, check_pairs, midline_labels
+from .mirror_pairs import MirrorPairs
 from .local_symmetries import LocalSymmetries, local_symmetries
 from .neighbourhoods import mean_nearest_spacing, pair_weights, require_connected, scaled_weights
 from .splines import thin_plate_spline
@@ -34,11 +35,14 @@ class SymmetrizationResult:
     points (N, 3): the warped vertices, in the frame chosen by ``output_frame``.
     asymmetry (N,): distance each vertex moved, measured in the input frame.
     report: pair count, plane, landmark asymmetry before/after, widths, seconds.
+    mirror_pairs: with automatic pairs, the mirror map they came from (every vertex's twin, with its
+    confidence); None with landmark pairs alone.
     """
 
     points: np.ndarray
     asymmetry: np.ndarray
     report: dict[str, Any]
+    mirror_pairs: MirrorPairs | None = None
 
 
 @dataclasses.dataclass(frozen=True)

@@ -31,6 +31,9 @@ from .attributes import optional_attribute, read_landmark_attributes
 FILTER_NAME = "generate_symmetrized_mesh"
 DISPLAY_NAME = "Symmetrize: Closed-form Blending of Local Symmetries"
 ASYMMETRY_ATTRIBUTE = "symblend_asymmetry"
+TWIN_ATTRIBUTE = "symblend_twin"  # per-vertex point: the vertex's mirror twin on the output (NaN: none)
+CONFIDENCE_ATTRIBUTE = "symblend_pair_confidence"  # per-vertex scalar in [0, 1] (0: no twin)
+WRITTEN = (ASYMMETRY_ATTRIBUTE, TWIN_ATTRIBUTE, CONFIDENCE_ATTRIBUTE)
 _SCRATCH = ("symblend_scratch_x", "symblend_scratch_y", "symblend_scratch_z",
             "symblend_scratch_quality")
 
@@ -56,6 +59,10 @@ def _add_output_layer(ms: pymeshlab.MeshSet, input_id: int, result, carried: dic
         output.add_vertex_custom_scalar_attribute(result.asymmetry, ASYMMETRY_ATTRIBUTE)
         for name, values in carried.items():
             output.add_vertex_custom_scalar_attribute(values, name)
+        if result.mirror_pairs is not None:  # automatic pairs: the map they came from, on the output
+            twin, confidence = result.mirror_pairs.per_vertex(result.points)
+            output.add_vertex_custom_point_attribute(twin, TWIN_ATTRIBUTE)
+            output.add_vertex_custom_scalar_attribute(confidence, CONFIDENCE_ATTRIBUTE)
         if not output.is_point_cloud():
             ms.compute_normal_per_face()
             ms.compute_normal_per_vertex()
@@ -173,10 +180,11 @@ def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict |
     input_id = ms.current_mesh_id()
     mesh = ms.current_mesh()
     names = [options[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")]
-    if len(set(names)) < len(names) or ASYMMETRY_ATTRIBUTE in names:
+    if len(set(names)) < len(names) or set(WRITTEN) & set(names):
         raise ParameterError(
             f"`pair_attribute`, `midline_attribute` and `weight_attribute` must be three different "
-            f"names, none of them `{ASYMMETRY_ATTRIBUTE}` (the filter writes it); got {', '.join(names)}.")
+            f"names, none of them {', '.join(f'`{name}`' for name in WRITTEN)} (the filter writes them); "
+            f"got {', '.join(names)}.")
     key = None if cache is None else _fingerprint(mesh, options)
     result = None if cache is None else cache.get(key)
     carried = {name: values for name in names if (values := optional_attribute(mesh, name)) is not None}

@@ -21,7 +21,8 @@ KNOWN_PROPERTIES = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "al
 
 
 def read_ply_vertex_properties(path) -> dict[str, np.ndarray]:
-    """Every scalar vertex property of a PLY file, as float arrays (N,), by name."""
+    """Every vertex property of a PLY file, by name, as float arrays: (N,) for a scalar, (N, k) for a list of
+    one length k on every vertex (a custom point attribute: k = 3)."""
     path = pathlib.Path(path)
     with path.open("rb") as handle:
         if handle.readline().strip() != b"ply":
@@ -47,32 +48,70 @@ def read_ply_vertex_properties(path) -> dict[str, np.ndarray]:
     if not elements or elements[0][0] != "vertex":
         raise SymblendError(f"{path}: the vertex element must come first in the PLY file.")
     _, count, properties = elements[0]
-    if any(p[0] == "list" for p in properties):
-        raise SymblendError(f"{path}: list properties on vertices are not supported.")
-    names = [p[1] for p in properties]
     if encoding == "ascii":
         with path.open("rb") as handle:
             handle.seek(body_start)
             rows = np.loadtxt(handle, max_rows=count, ndmin=2)
-        return {name: rows[:, i].astype(float) for i, name in enumerate(names)}
+        return _columns(path, properties, rows[0], lambda column: rows[:, column])
     order = {"binary_little_endian": "<", "binary_big_endian": ">"}.get(encoding)
     if order is None:
         raise SymblendError(f"{path}: unknown PLY format {encoding!r}.")
-    dtype = np.dtype([(p[1], order + PLY_TYPES[p[0]]) for p in properties])
-    data = np.fromfile(path, dtype=dtype, count=count, offset=body_start)
-    return {name: data[name].astype(float) for name in names}
+    # A list property (MeshLab writes a custom point attribute as one of 3 doubles) has a fixed length when
+    # every vertex's count equals the first vertex's: read that count, then every record with it.
+    fields, offset = [], body_start
+    with path.open("rb") as handle:
+        for number, p in enumerate(properties):
+            if p[0] == "list":
+                handle.seek(offset)
+                length_type = np.dtype(order + PLY_TYPES[p[1]])
+                length = int(np.frombuffer(handle.read(length_type.itemsize), dtype=length_type)[0])
+                fields += [(f"_count{number}", length_type), (p[3], order + PLY_TYPES[p[2]], (length,))]
+            else:
+                fields.append((p[1], order + PLY_TYPES[p[0]]))
+            offset = body_start + np.dtype(fields).itemsize
+    data = np.fromfile(path, dtype=np.dtype(fields), count=count, offset=body_start)
+    for number, p in enumerate(properties):
+        if p[0] == "list" and np.any(data[f"_count{number}"] != data[f"_count{number}"][0]):
+            raise SymblendError(f"{path}: the vertex property {p[3]!r} is a list of varying length; only lists "
+                                "of one length (such as a point attribute's 3 coordinates) are read.")
+    return {p[-1]: data[p[-1]].astype(float) for p in properties}
+
+
+def _columns(path, properties, first_row, column_of) -> dict[str, np.ndarray]:
+    """The properties of an ASCII PLY's vertex rows: scalars (N,), lists of one length (N, k)."""
+    out, column = {}, 0
+    for p in properties:
+        if p[0] == "list":
+            length = int(first_row[column])
+            counts = column_of(column)
+            if np.any(counts != length):
+                raise SymblendError(f"{path}: the vertex property {p[3]!r} is a list of varying length; only "
+                                    "lists of one length (such as a point attribute's 3 coordinates) are read.")
+            out[p[3]] = np.column_stack([column_of(column + 1 + k) for k in range(length)]).astype(float)
+            column += 1 + length
+        else:
+            out[p[1]] = column_of(column).astype(float)
+            column += 1
+    return out
 
 
 def load_mesh_with_attributes(ms, path) -> list[str]:
-    """``ms.load_new_mesh(path)``, then, for a PLY file, the extra vertex properties as custom
-    scalar attributes on the new mesh. Returns the names re-attached."""
+    """``ms.load_new_mesh(path)``, then, for a PLY file, the extra vertex properties as custom attributes
+    on the new mesh: scalars as scalar attributes, lists of 3 as point attributes (others are left out).
+    Returns the names re-attached."""
     ms.load_new_mesh(str(path))
     if pathlib.Path(path).suffix.lower() != ".ply":
         return []
     mesh = ms.current_mesh()
     attached = []
     for name, values in read_ply_vertex_properties(path).items():
-        if name.lower() not in KNOWN_PROPERTIES and len(values) == mesh.vertex_number():
+        if name.lower() in KNOWN_PROPERTIES or len(values) != mesh.vertex_number():
+            continue
+        if values.ndim == 1:
             mesh.add_vertex_custom_scalar_attribute(values, name)
-            attached.append(name)
+        elif values.shape[1] == 3:
+            mesh.add_vertex_custom_point_attribute(values, name)
+        else:
+            continue
+        attached.append(name)
     return attached

@@ -3,6 +3,6 @@
 medium into the problem and the result back."""
 
 from .problem import Problem, build_problem
-from .run import solve_problem, symmetrize
+from .run import find_mirror_pairs, solve_problem, symmetrize
 
-__all__ = ["Problem", "build_problem", "solve_problem", "symmetrize"]
+__all__ = ["Problem", "build_problem", "find_mirror_pairs", "solve_problem", "symmetrize"]

@@ -10,7 +10,9 @@ import numpy as np
 
 from ..auto import symmetrize_automatic
 from ..core.mirror_fill import fill_from_mirror
+from ..core.mirror_pairs import MirrorPairs
 from ..core.symmetrize import SymmetrizationResult, solve
+from ..errors import ParameterError
 from ..parameters import ARRAYS, CORE, keyword_signature, options_of, parameters_doc, validate_parameters
 from .problem import Problem, build_problem
 
@@ -130,3 +132,31 @@ Examples
 >>> result.report["auto_pairs"]["twins_are"]
 'exact vertices'
 """
+
+
+def find_mirror_pairs(points, faces=None, left=None, right=None, pair_ids=None, midline=None, progress=None,
+                      auto_excluded=None, auto_config=None, **params) -> MirrorPairs:
+    """Every vertex's mirror twin on the surface of ``points`` (N, 3) with ``faces`` (F, 3) (None: a point
+    cloud), as ``symmetrize(..., pairs='auto')`` finds them, or ``'landmarks+auto'`` when landmark pairs
+    ``left``, ``right`` (n,) are given (their vertices, and ``auto_excluded``, get no twin).
+
+    ``params``: the automatic pairs' options of :func:`symmetrize` (``pairs`` must not be 'landmarks').
+    The map is the one the symmetrization's last kept round used, so finding it costs a symmetrization.
+
+    Returns a :class:`~filter_symblend.core.mirror_pairs.MirrorPairs`: ``vertex`` (k,) with a twin,
+    ``twin`` (k, 3) on the input surface, ``confidence`` (k,) in [0, 1], and ``report`` (which map, the
+    share of pairable vertices with a twin and with a confident one).
+
+    >>> import filter_symblend
+    >>> from filter_symblend import synthetic
+    >>> points, faces = synthetic.icosphere(3)
+    >>> twins = filter_symblend.find_mirror_pairs(synthetic.bend(synthetic.bumpy(points), 0.3), faces)
+    >>> bool(twins.report["confident_share"] > 0.9)
+    True
+    """
+    params.setdefault("pairs", "auto" if left is None else "landmarks+auto")
+    if params["pairs"] == "landmarks":
+        raise ParameterError("find_mirror_pairs finds automatic pairs: use pairs='auto', or 'landmarks+auto' "
+                             "with landmark pairs (left, right); pairs='landmarks' has no mirror map to return.")
+    return symmetrize(points, left, right, pair_ids, midline, progress=progress, faces=faces,
+                      auto_excluded=auto_excluded, auto_config=auto_config, **params).mirror_pairs

@@ -1,0 +1,98 @@
+"""Every vertex's twin under the chosen mirror map, with a confidence from the map's own evidence.
+
+A twin is listed wherever the map mirrors the vertex (its prediction lands on the surface, comes back,
+and faces the mirrored way: :mod:`.twins`); it is a vertex where the map lands within a tenth of an edge
+of one that is unambiguous and mutual (a mirrored tessellation), else a point inside a triangle. Its confidence weighs three kinds of evidence, each a
+length in units of the local vertex spacing ``s`` (a twin a whole edge off is a wrong twin, whatever
+the mesh's size or resolution):
+
+- the round trip: the twin's own twin, ``m(m(x))``, against ``x``;
+- the landing: how far off the surface the map's prediction fell;
+- the neighbours: where the affine map fitted to the nearest other pairs (leave-one-out) puts the
+  twin, against the twin (a map that tears, or folds a limb onto the wrong one, disagrees with its
+  neighbours).
+
+``confidence = exp(-(e_trip^2 + e_land^2 + e_neighbours^2) / 2)`` with each error in units of ``s``:
+1 where the map is exactly an involution that lands on the surface and is locally affine, 0.61 for
+one error of an edge, below 0.5 (:data:`~filter_symblend.core.mirror_pairs.CONFIDENT`) beyond about
+1.2 edges in all.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..core.mirror_pairs import CONFIDENT, MirrorPairs
+from .config import AutoConfig
+from .growth import affine_mirror_maps
+from .maps import MirrorMap
+from .surface import Surface
+from .twins import find_twins
+
+NEIGHBOURS = 12  # pairs fitting each leave-one-out local map: as the growth's local maps (AutoConfig.local_neighbours)
+
+
+def _neighbour_misfit(positions: np.ndarray, twins: np.ndarray, config: AutoConfig) -> np.ndarray:
+    """(k,) distance from each twin (k, 3) to where the affine map of the nearest other pairs puts it."""
+    k = min(config.local_neighbours + 1, len(positions))
+    if k < 5:
+        return np.zeros(len(positions))
+    _, nearest = cKDTree(positions).query(positions, k=k)
+    others = nearest[:, 1:]
+    predicted, _ = affine_mirror_maps(positions[others], twins[others], np.ones(others.shape), positions,
+                                      config.growth_ridge)
+    return np.linalg.norm(predicted - twins, axis=1)
+
+
+def evidence(mirror: MirrorMap, sources: np.ndarray, config: AutoConfig, tolerance: float):
+    """(twins of ``sources`` (:class:`.twins.Twins`), listed (m,) bool, errors (m, 3) in units of the local
+    spacing: round trip, landing, neighbours (0 where not listed))."""
+    surface = mirror.surface
+    twins = find_twins(mirror, sources, tolerance)
+    listed = twins.covered(tolerance)
+    errors = np.zeros((len(sources), 3))
+    rows = np.flatnonzero(listed)
+    if not len(rows):
+        return twins, listed, errors
+    spacing = np.maximum(surface.local_spacing[sources[rows]], 1e-12 * surface.diagonal)
+    positions, point = surface.points[sources[rows]], twins.point[rows]
+    back = surface.nearest_points(mirror.predict(point))[0]
+    errors[rows, 0] = np.linalg.norm(back - positions, axis=1) / spacing
+    errors[rows, 1] = twins.landing[rows] / spacing
+    errors[rows, 2] = _neighbour_misfit(positions, point, config) / spacing
+    return twins, listed, errors
+
+
+def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, config: AutoConfig,
+                 report: dict | None = None) -> MirrorPairs:
+    """The twins of every pairable vertex of ``geometry`` (the input surface; ``mirror`` may live on a
+    symmetrized output of it) that ``mirror`` mirrors, none on or toward a ``forbidden`` (N,) bool vertex;
+    duplicates of a vertex take its twin. ``report``: what the run said of the map (merged in)."""
+    tolerance = config.landing_tolerance * geometry.diagonal
+    sources = np.flatnonzero(geometry.usable & ~forbidden)
+    twins, listed, errors = evidence(mirror, sources, config, tolerance)
+    listed &= ~forbidden[twins.corners].any(axis=1)
+    confidence = np.exp(-0.5 * np.sum(errors**2, axis=1))
+    rows = np.flatnonzero(listed)
+    # Every vertex at a listed vertex's position (an OBJ's seam duplicates) takes its twin.
+    row_of = np.full(len(geometry.points), -1)
+    row_of[sources[rows]] = rows
+    vertex = np.flatnonzero(row_of[geometry.representative] >= 0)
+    rows = row_of[geometry.representative[vertex]]
+    corners, weights = twins.corners[rows].copy(), twins.weights[rows].copy()
+    # A twin that is a vertex (a mirrored tessellation: within a tenth of an edge, unambiguous, mutual) is that
+    # vertex, not the point of a triangle the prediction's rounding reached.
+    exact = twins.exact_vertex(config)[rows]
+    corners[exact] = twins.vertex[rows][exact, None]
+    weights[exact] = [1.0, 0.0, 0.0]
+    twin = np.einsum("kj,kji->ki", weights, geometry.points[corners])
+    pairable = max(len(sources), 1)
+    confident = confidence[listed] >= CONFIDENT
+    summary = {**(report or {}), "map": mirror.name, "twin_share": float(np.count_nonzero(listed) / pairable),
+               "confident_share": float(np.count_nonzero(confident) / pairable),
+               "confidence_threshold": CONFIDENT,
+               "median_errors_in_spacings": dict(zip(("round_trip", "landing", "neighbours"),
+                                                     np.median(errors[listed], axis=0).tolist()
+                                                     if listed.any() else [None] * 3))}
+    return MirrorPairs(vertex, twin, corners, weights, confidence[rows], len(geometry.points), summary)

@@ -1,0 +1,71 @@
+"""A mirror map as a result: each vertex's twin on the surface, and how sure the map is of it.
+
+The twin of a vertex is a point of the surface, stored as barycentric ``weights`` on the triangle
+``corners``: the same material point on the input and on any embedding of the mesh (the symmetrized
+output), so the twins can be placed on either (:meth:`MirrorPairs.twins_on`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+
+from .mesh_quantities import farthest_point_order
+
+CONFIDENT = 0.5  # a twin at or above this confidence counts as confident (see auto/confidence)
+
+
+@dataclasses.dataclass(frozen=True)
+class MirrorPairs:
+    """The twins of ``vertex`` (k,) int: ``twin`` (k, 3) the twin as a point of the input surface,
+    barycentric ``weights`` (k, 3) on the vertices ``corners`` (k, 3); ``confidence`` (k,) in [0, 1];
+    ``n_vertices`` the mesh's vertex count; ``report``: the map's name, its coverage (share of the
+    pairable vertices with a twin), consistency and confident share."""
+
+    vertex: np.ndarray
+    twin: np.ndarray
+    corners: np.ndarray
+    weights: np.ndarray
+    confidence: np.ndarray
+    n_vertices: int
+    report: dict[str, Any]
+
+    def twins_on(self, points: np.ndarray) -> np.ndarray:
+        """(k, 3): the twins on another embedding ``points`` (N, 3) of the same mesh."""
+        return np.einsum("kj,kji->ki", self.weights, np.asarray(points, dtype=float)[self.corners])
+
+    def per_vertex(self, points: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(twin (N, 3), NaN where a vertex has none; confidence (N,), 0 where none), on ``points``
+        (N, 3) (default: the input)."""
+        twin = np.full((self.n_vertices, 3), np.nan)
+        twin[self.vertex] = self.twin if points is None else self.twins_on(points)
+        confidence = np.zeros(self.n_vertices)
+        confidence[self.vertex] = self.confidence
+        return twin, confidence
+
+    def confident(self, threshold: float = CONFIDENT) -> np.ndarray:
+        """(k,) bool: the pairs whose confidence is at least ``threshold``."""
+        return self.confidence >= threshold
+
+
+def pairs_to_check(pairs: MirrorPairs, points: np.ndarray, count: int,
+                   threshold: float = CONFIDENT) -> np.ndarray:
+    """Rows into ``pairs`` (c,): up to ``count`` of the confident pairs spread evenly over the surface
+    (farthest-point order), each once, from its vertex on the left side of the shape.
+
+    Pairs whose two points lie closer than 2 % of the bounding-box ``diagonal`` of ``points`` (N, 3) are
+    left out: a landmark pair that close to the midline says little about the mirror and snaps ambiguously.
+    The side is the sign of the pair's gap along the principal direction of all the gaps (the mirror
+    direction, bent shapes included, as long as no part is turned over)."""
+    points = np.asarray(points, dtype=float)
+    diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
+    gaps = points[pairs.vertex] - pairs.twin
+    apart = np.linalg.norm(gaps, axis=1) > 0.02 * diagonal
+    eligible = np.flatnonzero(pairs.confident(threshold) & apart)
+    if not len(eligible):
+        return eligible
+    direction = np.linalg.eigh(gaps[eligible].T @ gaps[eligible])[1][:, -1]
+    left = eligible[gaps[eligible] @ direction >= 0]  # each pair once: from its left vertex
+    return left[farthest_point_order(points[pairs.vertex[left]], min(count, len(left)))]

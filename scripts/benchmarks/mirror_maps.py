@@ -1,0 +1,207 @@
+"""The mirror map itself against published ground truth: the self-symmetry of real posed shapes.
+
+The BCICP dataset (Ren, Poulenard, Wonka and Ovsjanikov, SIGGRAPH Asia 2018): FAUST humans and TOSCA
+animals and people remeshed to 5,000 vertices; line i of ``corres/X.vts`` and of ``corres/X.sym.vts`` are
+a vertex and its mirror twin (1-based). Its licences forbid redistribution: it is read in place, from a
+git snapshot of the public repository llorz/SGA18_orientation_BCICP_dataset (``git show``, nothing
+extracted) or an unpacked copy, found by ``--bcicp PATH`` or $BCICP_DATASET; absent, the section says so.
+
+Per shape, for every ground-truth pair in both directions: the error of the twin the map gives,
+|twin(a) - b| / sqrt(surface area) (a vertex without a twin counts as an error of infinity); its mean over
+the twins given, its median over all, the share within 0.05 and 0.10; whether the run was refused; the
+confident share of the surface; how many of the large errors (> 0.05) the confidence marks doubtful; and
+the seconds. Beside it, a baseline from a well-kept library: pyFM (``pip install '.[bench]'``), an
+orientation-reversing functional map of the shape to itself (WKS descriptors), refined by ZoomOut. And
+the end-to-end figure: the symmetry error over all ground-truth pairs (RMS of |left - mirror(twin)| over
+the best plane, % of the diagonal) of the input, of the automatic pairs' output, and of the output from
+100 ground-truth landmark pairs.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import subprocess
+import time
+
+import numpy as np
+
+from filter_symblend import SymblendError, find_mirror_pairs, symmetrize
+from filter_symblend.core.landmark_asymmetry import fit_mirror_plane
+from filter_symblend.core.mesh_quantities import farthest_point_order
+from filter_symblend.core.mirror_pairs import CONFIDENT
+
+from .common import quiet
+
+SNAPSHOT = pathlib.Path("/work/.mirror/llorz+SGA18_orientation_BCICP_dataset/repo")
+FOLDERS = {"FAUST": "Dataset/FAUST/vtx_5k", "TOSCA": "Dataset/TOSCA_Isometric/vtx_5k"}
+# The stated subset (about 4 minutes on 2 cores): ten FAUST humans (ten subjects, a pose each) and one or two
+# poses of every TOSCA class. --quick: six of them; --all-shapes: every shape of both folders (about 25 minutes).
+SUBSET = {"FAUST": [f"tr_reg_{i:03d}" for i in range(0, 100, 11)],
+          "TOSCA": ["cat0", "cat4", "centaur0", "david0", "dog0", "horse0", "horse5", "michael0", "michael8",
+                    "victoria0", "wolf0", "wolf2"]}
+QUICK = {"FAUST": ["tr_reg_000", "tr_reg_055"], "TOSCA": ["cat4", "horse5", "michael8", "wolf2"]}
+WRONG = 0.05  # a twin this far from the true one (x sqrt(area)) is wrong (the issue's measure)
+
+
+class Dataset:
+    """The BCICP files, from a git snapshot or a folder."""
+
+    def __init__(self, root: pathlib.Path):
+        self.root = root
+        self.git = (root / "HEAD").exists() and not (root / "Dataset").exists()
+
+    def text(self, path: str) -> str:
+        if self.git:
+            return subprocess.run(["git", "-C", str(self.root), "show", f"HEAD:{path}"], capture_output=True,
+                                  check=True).stdout.decode()
+        return (self.root / path).read_text()
+
+    def names(self, folder: str) -> list[str]:
+        if self.git:
+            listed = subprocess.run(["git", "-C", str(self.root), "ls-tree", "--name-only", f"HEAD:{FOLDERS[folder]}/"],
+                                    capture_output=True, check=True, text=True).stdout.split()
+        else:
+            listed = [p.name for p in (self.root / FOLDERS[folder]).iterdir()]
+        return sorted(name[:-4] for name in listed if name.endswith(".off"))
+
+    def shape(self, folder: str, name: str):
+        """(points (N, 3), faces (F, 3), ground-truth pairs a (m,), b (m,)) of one shape."""
+        words = self.text(f"{FOLDERS[folder]}/{name}.off").split()
+        n, f = int(words[1]), int(words[2])
+        values = words[4:]
+        points = np.array(values[:3 * n], dtype=float).reshape(n, 3)
+        faces = np.array(values[3 * n:3 * n + 4 * f], dtype=np.int64).reshape(f, 4)[:, 1:]
+        a = np.array(self.text(f"{FOLDERS[folder]}/corres/{name}.vts").split(), dtype=np.int64) - 1
+        b = np.array(self.text(f"{FOLDERS[folder]}/corres/{name}.sym.vts").split(), dtype=np.int64) - 1
+        return points, faces, a, b
+
+
+def find_dataset(path: str | None) -> Dataset | None:
+    for candidate in (path, os.environ.get("BCICP_DATASET"), SNAPSHOT):
+        if candidate and pathlib.Path(candidate).exists():
+            return Dataset(pathlib.Path(candidate))
+    return None
+
+
+def surface_area(points: np.ndarray, faces: np.ndarray) -> float:
+    corners = points[faces]
+    return 0.5 * float(np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]),
+                                      axis=1).sum())
+
+
+def twin_errors(twin: np.ndarray, points: np.ndarray, a: np.ndarray, b: np.ndarray, scale: float) -> np.ndarray:
+    """(2m,) |twin(a) - b| and |twin(b) - a| / ``scale``; inf where the map gives no twin."""
+    source, target = np.concatenate([a, b]), np.concatenate([b, a])
+    error = np.linalg.norm(twin[source] - points[target], axis=1) / scale
+    return np.where(np.isfinite(error), error, np.inf)
+
+
+def symmetry_error(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    """RMS over the ground-truth pairs of |a - mirror(b)| across their best plane, % of the diagonal."""
+    deviations = fit_mirror_plane(points[a], points[b]).deviations
+    return 100 * float(np.sqrt(np.mean(deviations**2)) / np.linalg.norm(np.ptp(points, axis=0)))
+
+
+def pyfm_twins(points: np.ndarray, faces: np.ndarray):
+    """The vertex twins (N, 3) of pyFM's orientation-reversing self map refined by ZoomOut, or None without
+    pyFM. Its documented pipeline: WKS descriptors, a 30 x 30 map with the orientation term, ZoomOut to 100."""
+    try:
+        from pyFM.functional import FunctionalMapping
+        from pyFM.mesh import TriMesh
+    except ImportError:
+        return None
+    mesh = TriMesh(points, faces)
+    model = FunctionalMapping(mesh, TriMesh(points.copy(), faces.copy()))
+    model.preprocess(n_descr=100, descr_type="WKS", k_process=200, subsample_step=5, verbose=False)
+    model.fit(K=(30, 30), w_descr=1e0, w_lap=1e-2, w_dcomm=1e-1, w_orient=1e0, orient_reversing=True, verbose=False)
+    refined = model.zoomout_refine(nit=14, step=5, verbose=False)
+    p2p = model.get_p2p(FM=refined)  # mesh2 -> mesh1: each vertex's twin
+    return points[p2p]
+
+
+def landmark_output(points: np.ndarray, a: np.ndarray, b: np.ndarray, mode: str) -> np.ndarray:
+    """The output from 100 ground-truth pairs spread by farthest-point sampling over the pairs whose two
+    sides lie apart (2 % of the diagonal)."""
+    diagonal = np.linalg.norm(np.ptp(points, axis=0))
+    apart = np.flatnonzero((a != b) & (np.linalg.norm(points[a] - points[b], axis=1) > 0.02 * diagonal))
+    _, first = np.unique(np.minimum(a[apart], b[apart]), return_index=True)
+    apart = apart[first]
+    chosen = apart[farthest_point_order(points[a[apart]], min(100, len(apart)))]
+    return quiet(symmetrize, points, a[chosen], b[chosen], mode=mode).points
+
+
+def summary(errors: np.ndarray) -> str:
+    given = errors[np.isfinite(errors)]
+    mean = f"{given.mean():.3f}" if len(given) else "-"
+    return (f"{mean} | {np.median(errors):.3f} | {np.mean(errors <= 0.05):.0%} | {np.mean(errors <= 0.10):.0%}")
+
+
+def mirror_maps_main(args) -> None:
+    dataset = find_dataset(args.bcicp)
+    print("## The mirror map against the BCICP dataset's ground-truth self-symmetry\n")
+    if dataset is None:
+        print(f"skipped: the BCICP dataset is absent (fetch llorz/SGA18_orientation_BCICP_dataset; --bcicp PATH or "
+              f"$BCICP_DATASET, default {SNAPSHOT})")
+        return
+    shapes = ({folder: dataset.names(folder) for folder in FOLDERS} if args.all_shapes
+              else QUICK if args.quick else SUBSET)
+    print(f"error = |twin(a) - b| / sqrt(area) over every ground-truth pair, both ways (no twin: inf); "
+          f"'low conf. finds' = share of the twins wrong by > {WRONG} that have confidence < {CONFIDENT}; "
+          "symmetry = RMS |a - mirror(b)| over all ground-truth pairs, % of the diagonal\n")
+    print("| shape | auto: mean | median | <= 0.05 | <= 0.10 | confident share | low conf. finds | warns | s "
+          "| pyFM: mean | median | <= 0.05 | <= 0.10 | s | symmetry: input | auto | 100 landmarks | auto / landmarks |")
+    print("|" + "---|" * 19)
+    totals = {"auto": [], "pyfm": [], "ratio": [], "wrong_total": 0, "wrong_found": 0}
+    for folder, names in shapes.items():
+        for name in names:
+            points, faces, a, b = dataset.shape(folder, name)
+            scale = np.sqrt(surface_area(points, faces))
+            start = time.perf_counter()
+            try:
+                pairs, result = None, quiet(symmetrize, points, faces=faces, pairs="auto", mode=args.mode)
+                pairs = result.mirror_pairs
+                seconds = time.perf_counter() - start
+            except SymblendError as error:
+                seconds = time.perf_counter() - start
+                auto = f"refused: {str(error)[:60]}... | | | | | | | {seconds:.1f}"
+                errors = np.full(2 * len(a), np.inf)
+            if pairs is not None:
+                twin, confidence = pairs.per_vertex()
+                errors = twin_errors(twin, points, a, b, scale)
+                wrong = errors > WRONG
+                doubtful = confidence[np.concatenate([a, b])] < CONFIDENT
+                totals["wrong_total"] += int(wrong.sum())
+                totals["wrong_found"] += int((wrong & doubtful).sum())
+                finds = f"{np.mean(doubtful[wrong]):.0%} of {wrong.sum()}" if wrong.any() else "none wrong"
+                warns = "yes" if result.report["auto_pairs"].get("warnings") else "no"
+                auto = (f"{summary(errors)} | {pairs.report['confident_share']:.0%} | {finds} | {warns} | "
+                        f"{seconds:.1f}")
+            totals["auto"].append(np.median(errors))
+            start = time.perf_counter()
+            baseline = pyfm_twins(points, faces) if not args.no_pyfm else None
+            if baseline is None:
+                pyfm = "not run (pip install '.[bench]') | | | |"
+            else:
+                pyfm_errors = twin_errors(baseline, points, a, b, scale)
+                totals["pyfm"].append(np.median(pyfm_errors))
+                pyfm = f"{summary(pyfm_errors)} | {time.perf_counter() - start:.1f}"
+            before = symmetry_error(points, a, b)
+            landmarks = symmetry_error(landmark_output(points, a, b, args.mode), a, b)
+            after = symmetry_error(result.points, a, b) if pairs is not None else float("nan")
+            ratio = after / landmarks if pairs is not None else float("inf")
+            totals["ratio"].append(ratio)
+            print(f"| {name} | {auto} | {pyfm} | {before:.2f} | {after:.2f} | {landmarks:.2f} | {ratio:.2f}x |",
+                  flush=True)
+    medians = np.array(totals["auto"])
+    print(f"\nshapes {len(medians)}; refused {int(np.sum(~np.isfinite(medians)))}; median twin error > {WRONG}: "
+          f"{int(np.sum(medians > WRONG))}; wrong twins with low confidence: {totals['wrong_found']} of "
+          f"{totals['wrong_total']}")
+    ratios = np.array(totals["ratio"])
+    finite = ratios[np.isfinite(ratios)]
+    if len(finite):
+        print(f"symmetry, auto / 100 landmarks: geometric mean {np.exp(np.mean(np.log(finite))):.2f}x over "
+              f"{len(finite)} shapes, worst {finite.max():.2f}x")
+    if totals["pyfm"]:
+        print(f"median of the per-shape median twin errors: auto {np.median(medians):.3f}, "
+              f"pyFM {np.median(totals['pyfm']):.3f}")

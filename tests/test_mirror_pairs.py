@@ -1,0 +1,243 @@
+"""The mirror map as a result (issue 45): every vertex's twin, against the ground truth of a symmetric mesh
+remeshed so that no vertex has an exact twin and deformed by a known map; and a confidence that finds the
+twins a map gets wrong."""
+
+import re
+
+import numpy as np
+import pytest
+
+from filter_symblend import MirrorPairs, ParameterError, find_mirror_pairs, synthetic
+from filter_symblend.auto.config import DEFAULT
+from filter_symblend.auto.confidence import mirror_pairs
+from filter_symblend.auto.maps import MirrorMap, plane_map
+from filter_symblend.auto.surface import build_surface
+from filter_symblend.core.mirror_pairs import CONFIDENT
+
+pytestmark = pytest.mark.auto
+
+
+@pytest.fixture(scope="module")
+def bent_remeshed_cow(remeshed_cow):
+    deformed = synthetic.random_rigid(synthetic.bend(remeshed_cow.points, 0.6), seed=7)
+    return remeshed_cow, deformed, find_mirror_pairs(deformed, remeshed_cow.faces, mode="affine")
+
+
+def test_twins_of_a_bent_remeshed_cow_are_its_true_twins(bent_remeshed_cow):
+    """Every vertex with a twin is listed (not only the solve's pairs), and the twins are the material
+    points the ground truth names, to a small fraction of an edge."""
+    truth, deformed, pairs = bent_remeshed_cow
+    assert isinstance(pairs, MirrorPairs)
+    twin, confidence = pairs.per_vertex()
+    listed = np.isfinite(twin[truth.left]).all(axis=1)
+    assert listed.mean() > 0.9  # far more than the few hundred pairs that enter the solve
+    assert len(pairs.vertex) > 0.9 * len(deformed)
+    spacing = np.median(np.linalg.norm(deformed[truth.faces[:, 0]] - deformed[truth.faces[:, 1]], axis=1))
+    error = np.linalg.norm(twin[truth.left][listed] - truth.twins(deformed)[listed], axis=1) / spacing
+    assert np.median(error) < 0.25 and np.percentile(error, 95) < 1.0
+    # the twin is a point of the input surface, and placed on another embedding by the same weights
+    np.testing.assert_allclose(pairs.twins_on(deformed), pairs.twin, atol=1e-12)
+    assert np.all((pairs.confidence >= 0) & (pairs.confidence <= 1))
+    assert np.all(confidence[np.isnan(twin).any(axis=1)] == 0)
+    report = pairs.report
+    assert report["confident_share"] > 0.9 and 0 < report["confident_share"] <= report["twin_share"] <= 1
+
+
+def test_symmetrize_reports_the_same_map(bent_remeshed_cow):
+    truth, deformed, pairs = bent_remeshed_cow
+    from filter_symblend import symmetrize
+    result = symmetrize(deformed, faces=truth.faces, pairs="auto", mode="affine")
+    np.testing.assert_array_equal(result.mirror_pairs.vertex, pairs.vertex)
+    np.testing.assert_allclose(result.mirror_pairs.twin, pairs.twin)
+    assert result.report["auto_pairs"]["mirror_map"]["confident_share"] == pairs.report["confident_share"]
+
+
+def test_confidence_finds_the_part_a_map_gets_wrong(remeshed_cow):
+    """The true reflection of the (undeformed, remeshed) cow, except that on one end of the body the map
+    sends each point ``shift`` edges along the body (a map that tears there, as a wrong limb does): no twin
+    there is confident (listed with a low confidence, or not listed: the map does not come back), while
+    the twins away from the tear are."""
+    truth = remeshed_cow
+    surface = build_surface(truth.points, truth.faces)
+    offset = 0.5 * (truth.points[:, 0].max() + truth.points[:, 0].min())
+    exact = plane_map(surface, [1.0, 0.0, 0.0], offset)
+    end = truth.points[:, 2].max() - 0.2 * np.ptp(truth.points[:, 2])
+    n = len(truth.points)
+    for shift in (1.5, 3.0):
+        def torn(x, shift=shift):
+            predicted = exact.predict(x)
+            predicted[x[:, 2] > end] += [0.0, 0.0, -shift * surface.spacing]
+            return predicted
+
+        pairs = mirror_pairs(MirrorMap("torn", surface, torn, exact.normal, exact.carry), surface,
+                             np.zeros(n, dtype=bool), DEFAULT)
+        confidence = pairs.per_vertex()[1]
+        in_tear = truth.points[:, 2] > end + 3 * surface.spacing
+        away = surface.usable & (truth.points[:, 2] < end - 5 * surface.spacing)
+        print(f"shift {shift} edges: confident in the tear {np.mean(confidence[in_tear] >= CONFIDENT):.3f}, "
+              f"away {np.mean(confidence[away] >= CONFIDENT):.3f}")
+        assert np.mean(confidence[in_tear] >= CONFIDENT) < 0.1
+        assert np.mean(confidence[away] >= CONFIDENT) > 0.9
+
+
+def test_find_mirror_pairs_refuses_landmark_pairs_alone():
+    points, faces = synthetic.icosphere(2)
+    with pytest.raises(ParameterError, match="pairs='landmarks' has no mirror map to return"):
+        find_mirror_pairs(points, faces, pairs="landmarks")
+
+
+def test_an_automatic_run_in_a_meshset_carries_the_map_on_its_output(bent_remeshed_cow):
+    """The output layer holds each vertex's twin on the output (the true material twin, moved by the warp) and
+    its confidence, as custom attributes a script can colour by, select with or save; the input has none."""
+    import pymeshlab
+    from filter_symblend import CONFIDENCE_ATTRIBUTE, TWIN_ATTRIBUTE
+    from filter_symblend.meshlab.attributes import custom_attribute_names
+    truth, deformed, pairs = bent_remeshed_cow
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=deformed, face_matrix=truth.faces))
+    report = ms.generate_symmetrized_mesh(pairs="auto", mode="affine", checks="none")
+    output = ms.current_mesh()
+    assert TWIN_ATTRIBUTE in custom_attribute_names(ms)["vp"]
+    twin = output.vertex_custom_point_attribute_matrix(TWIN_ATTRIBUTE)
+    confidence = output.vertex_custom_scalar_attribute_array(CONFIDENCE_ATTRIBUTE)
+    np.testing.assert_allclose(confidence[pairs.vertex], pairs.confidence)
+    listed = np.isfinite(twin[truth.left]).all(axis=1)
+    moved = output.vertex_matrix()
+    spacing = np.median(np.linalg.norm(moved[truth.faces[:, 0]] - moved[truth.faces[:, 1]], axis=1))
+    error = np.linalg.norm(twin[truth.left][listed] - truth.twins(moved)[listed], axis=1) / spacing
+    assert listed.mean() > 0.9 and np.median(error) < 0.25
+    assert report["auto_pairs"]["mirror_map"]["confident_share"] == pytest.approx(pairs.report["confident_share"])
+    ms.set_current_mesh(report["input_mesh_id"])
+    assert custom_attribute_names(ms) == {"vs": [], "vp": [], "fs": [], "fp": []}
+
+
+@pytest.fixture(scope="module")
+def bent_blob_file(tmp_path_factory):
+    """An exactly symmetric bumpy sphere (every vertex has an exact twin), bent, as an OBJ file."""
+    import pymeshlab
+    from conftest import symmetric_blob, twins
+    points, faces = symmetric_blob(4)
+    deformed = synthetic.bend(points, 0.5)
+    path = tmp_path_factory.mktemp("blob") / "blob_bent.obj"
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=deformed, face_matrix=faces))
+    ms.save_current_mesh(str(path))
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(path))
+    return path, ms.current_mesh().vertex_matrix(), faces, twins(points)
+
+
+@pytest.mark.parametrize("suffix", [".pp", ".fcsv", ".mrk.json", ".csv"])
+def test_pairs_written_as_landmarks_are_true_twins_and_read_back_unedited(bent_blob_file, tmp_path, suffix, capsys):
+    """`symblend pairs` writes --count confident pairs, each a vertex and its true twin, named so that
+    `symblend symmetrize -l` pairs them by name; the mesh made from them is more symmetric than the input."""
+    from scipy.spatial import cKDTree
+    from filter_symblend.commands.main import main
+    from filter_symblend.landmarks.files import read_landmarks
+    path, points, faces, true_twin = bent_blob_file
+    output = tmp_path / f"pairs{suffix}"
+    assert main(["pairs", str(path), "-o", str(output), "--count", "12", "--mode", "articulated"]) == 0
+    assert f"{output}: 12 automatic pairs" in capsys.readouterr().out
+    landmarks = read_landmarks(output).landmarks
+    assert [lm.name for lm in landmarks[:4]] == ["L_auto_1", "R_auto_1", "L_auto_2", "R_auto_2"]
+    assert len(landmarks) == 24
+    positions = np.array([lm.position for lm in landmarks])
+    distance, vertex = cKDTree(points).query(positions)
+    assert distance.max() < 1e-5  # each side is a vertex: the twins of a mirrored tessellation are vertices
+    np.testing.assert_array_equal(vertex[1::2], true_twin[vertex[0::2]])
+    sides = positions[0::2] - positions[1::2]
+    assert np.all(np.linalg.norm(sides, axis=1) > 0.02 * np.linalg.norm(np.ptp(points, axis=0)))
+    symmetrized = tmp_path / "blob_sym.ply"
+    assert main(["symmetrize", str(path), "-l", str(output), "-o", str(symmetrized), "--mode", "articulated",
+                 "--report", str(tmp_path / "report.json")]) == 0
+    import json
+    report = json.loads((tmp_path / "report.json").read_text())
+    assert report["pair_count"] == 12 and report["landmarks"]["pairing"] == "names"
+    before, after = report["mirror_asymmetry_before"]["p90"], report["mirror_asymmetry_after"]["p90"]
+    assert after < 0.5 * before
+
+
+def test_a_corrected_pairs_file_gives_the_corrected_result(bent_blob_file, tmp_path):
+    """A pair deleted (PickPoints' unchecked point: active="0") and another moved onto a wrong vertex: the
+    symmetrization reads the file as edited (one pair fewer; the moved one where it was put)."""
+    import json
+    from filter_symblend.commands.main import main
+    path, points, faces, true_twin = bent_blob_file
+    pairs = tmp_path / "pairs.pp"
+    assert main(["pairs", str(path), "-o", str(pairs), "--count", "10"]) == 0
+    text = pairs.read_text()
+    text = text.replace('name="L_auto_3" active="1"', 'name="L_auto_3" active="0"')
+    moved = re.sub(r'name="R_auto_5" active="1" x="[^"]*" y="[^"]*" z="[^"]*"',
+                   'name="R_auto_5" active="1" x="{}" y="{}" z="{}"'.format(*points[7]), text)
+    assert moved != text
+    pairs.write_text(moved)
+    report = tmp_path / "report.json"
+    assert main(["symmetrize", str(path), "-l", str(pairs), "-o", str(tmp_path / "out.ply"),
+                 "--report", str(report)]) == 0
+    data = json.loads(report.read_text())
+    assert data["pair_count"] == 9 and data["landmarks"]["left_out_unplaced"] == ["L_auto_3/R_auto_3"]
+    assert ["R_auto_5", 7] in data["landmarks"]["vertices"]
+
+
+@pytest.mark.parametrize(("arguments", "message"), [
+    (["-o", "{tmp}/pairs.tps"], r"pairs.tps: write the pairs as .pp, .fcsv, .mrk.json, .csv"),
+    (["-o", "{tmp}/pairs.pp", "--count", "0"], r"--count 0: give at least 1 pair to write"),
+    (["-o", "{tmp}/pairs.pp", "--pairs", "landmarks"], r"pairs='landmarks' has no mirror map to return"),
+])
+def test_pairs_command_errors(bent_blob_file, tmp_path, capsys, arguments, message):
+    from filter_symblend.commands.main import main
+    path = bent_blob_file[0]
+    assert main(["pairs", str(path), *[a.format(tmp=tmp_path) for a in arguments]]) == 1
+    err = capsys.readouterr().err
+    assert re.search(message, err), err
+    assert not (tmp_path / "pairs.pp").exists() and not (tmp_path / "pairs.tps").exists()
+
+
+def test_pairs_command_never_overwrites_a_file(bent_blob_file, tmp_path, capsys):
+    from filter_symblend.commands.main import main
+    existing = tmp_path / "mine.pp"
+    existing.write_text("keep me")
+    assert main(["pairs", str(bent_blob_file[0]), "-o", str(existing)]) == 1
+    assert existing.read_text() == "keep me"
+    assert "mine.pp: exists (pairs you corrected, perhaps); choose another file, or add --overwrite" in \
+        capsys.readouterr().err
+
+
+def _summary(p90: float) -> dict:
+    return {"p90": p90, "p90_relative": p90 / 100, "p99": 2 * p90, "p99_relative": p90 / 50, "max": 3 * p90}
+
+
+@pytest.mark.parametrize(("landmark_pairs", "automatic", "fix"), [
+    (0, True, "the automatic pairs mirror the wrong parts here: write them with `symblend pairs MESH -o pairs.pp`, "
+              "check and correct them in PickPoints (or place landmark pairs), then symmetrize with -l pairs.pp."),
+    (3, False, "with 3 landmark pairs, add dense pairs from the surface: --pairs landmarks+auto"),
+    (20, True, "check the landmark pairs (a swapped or misplaced pair?) and the mode."),
+])
+def test_a_worse_result_names_the_fix_of_the_run_it_was(landmark_pairs, automatic, fix):
+    """Advice about landmark pairs only where there are landmark pairs."""
+    from filter_symblend.checks.verdict import result_warnings
+    message, = result_warnings(_summary(1.0), _summary(2.0), landmark_pairs=landmark_pairs, automatic=automatic)
+    assert message.startswith("the output is more asymmetric than the input: 90th percentile 1 % -> 2 %")
+    assert fix in message
+
+
+def test_the_twins_survive_a_ply_file(bent_blob_file, tmp_path):
+    """`symblend symmetrize --pairs auto -o out.ply` writes the twins (a point attribute, a list of 3 doubles
+    in the PLY) and the confidence; loading the file re-attaches both, unchanged."""
+    import pymeshlab
+    from filter_symblend import CONFIDENCE_ATTRIBUTE, TWIN_ATTRIBUTE
+    from filter_symblend.commands.main import main
+    from filter_symblend.meshlab.ply_attributes import load_mesh_with_attributes
+    path, points, faces, true_twin = bent_blob_file
+    output = tmp_path / "out.ply"
+    assert main(["symmetrize", str(path), "--pairs", "auto", "-o", str(output)]) == 0
+    ms = pymeshlab.MeshSet()
+    assert {TWIN_ATTRIBUTE, CONFIDENCE_ATTRIBUTE} <= set(load_mesh_with_attributes(ms, output))
+    mesh = ms.current_mesh()
+    twin = mesh.vertex_custom_point_attribute_matrix(TWIN_ATTRIBUTE)
+    moved = mesh.vertex_matrix()
+    listed = np.isfinite(twin).all(axis=1)
+    assert listed.mean() > 0.95
+    # each twin is the true twin vertex, on the output (float32 coordinates in the PLY)
+    np.testing.assert_allclose(twin[listed], moved[true_twin[listed]], atol=1e-6)
+    assert np.all(mesh.vertex_custom_scalar_attribute_array(CONFIDENCE_ATTRIBUTE)[listed] > 0)
