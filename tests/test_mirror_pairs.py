@@ -241,3 +241,29 @@ def test_the_twins_survive_a_ply_file(bent_blob_file, tmp_path):
     # each twin is the true twin vertex, on the output (float32 coordinates in the PLY)
     np.testing.assert_allclose(twin[listed], moved[true_twin[listed]], atol=1e-6)
     assert np.all(mesh.vertex_custom_scalar_attribute_array(CONFIDENCE_ATTRIBUTE)[listed] > 0)
+
+
+def test_a_map_wrong_on_much_of_the_surface_warns_with_the_share_and_the_fix(remeshed_cow):
+    """Torn over the half of the body: the confident share falls below DOUBTFUL_SHARE and the warning names
+    it, the map, and the round trip through an editable pairs file; a sound map does not warn."""
+    from filter_symblend.auto.confidence import doubtful_map_warning
+    truth = remeshed_cow
+    surface = build_surface(truth.points, truth.faces)
+    exact = plane_map(surface, [1.0, 0.0, 0.0], 0.5 * (truth.points[:, 0].max() + truth.points[:, 0].min()))
+    half = np.median(truth.points[:, 2])
+
+    def torn(x):
+        predicted = exact.predict(x)
+        predicted[x[:, 2] > half] += [0.0, 0.0, -3.0 * surface.spacing]
+        return predicted
+
+    none = np.zeros(len(truth.points), dtype=bool)
+    assert doubtful_map_warning(mirror_pairs(exact, surface, none, DEFAULT).report) is None
+    report = mirror_pairs(MirrorMap("torn", surface, torn, exact.normal, exact.carry), surface, none, DEFAULT).report
+    message = doubtful_map_warning(report)
+    assert message == (
+        f"only {report['confident_share']:.0%} of the surface has a confident mirror twin (map: torn); the automatic "
+        "pairs may mirror the wrong parts. Write them with `symblend pairs MESH -o pairs.pp` (find_mirror_pairs in "
+        "Python), check and correct them in MeshLab's PickPoints, then symmetrize with -l pairs.pp; or place "
+        "landmark pairs where the per-vertex symblend_pair_confidence is low.")
+    assert report["confident_share"] < 0.6

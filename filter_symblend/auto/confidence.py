@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..core.mirror_pairs import CONFIDENT, MirrorPairs
+from ..core.mirror_pairs import CONFIDENT, DOUBTFUL_SHARE, MirrorPairs
 from .config import AutoConfig
 from .growth import affine_mirror_maps
 from .maps import MirrorMap
@@ -96,3 +96,15 @@ def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, co
                                                      np.median(errors[listed], axis=0).tolist()
                                                      if listed.any() else [None] * 3))}
     return MirrorPairs(vertex, twin, corners, weights, confidence[rows], len(geometry.points), summary)
+
+
+def doubtful_map_warning(report: dict) -> str | None:
+    """The warning a result deserves when too little of its map is confident (``report``: a
+    :class:`MirrorPairs` report), or None."""
+    share = report["confident_share"]
+    if share >= DOUBTFUL_SHARE:
+        return None
+    return (f"only {share:.0%} of the surface has a confident mirror twin (map: {report['map']}); the automatic pairs "
+            "may mirror the wrong parts. Write them with `symblend pairs MESH -o pairs.pp` (find_mirror_pairs in "
+            "Python), check and correct them in MeshLab's PickPoints, then symmetrize with -l pairs.pp; or place "
+            "landmark pairs where the per-vertex symblend_pair_confidence is low.")

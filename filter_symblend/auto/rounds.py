@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+import warnings
 
 import numpy as np
 from scipy.sparse.csgraph import connected_components
@@ -23,11 +24,11 @@ from ..core.geometry import reflection_across_plane
 from ..core.landmark_asymmetry import fit_mirror_plane
 from ..core.neighbourhoods import connecting_width, mean_nearest_spacing, pair_weights
 from ..core.symmetrize import CheckedLandmarks, SymmetrizationResult, scaled_progress, solve
-from ..errors import DegenerateNeighbourhoodError, GeometryError
+from ..errors import DegenerateNeighbourhoodError, GeometryError, SymblendWarning
 from ..parameters import CORE, options_of
 from .config import DEFAULT, AutoConfig
 from .field import MirrorField, field_centres, register
-from .confidence import mirror_pairs
+from .confidence import doubtful_map_warning, mirror_pairs
 from .first_map import coverage, first_map
 from .maps import MirrorMap, field_map, plane_map
 from .pairs import Constraints, as_landmarks, find_pairs, spread
@@ -168,6 +169,10 @@ def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, l
     if progress is not None:
         progress(98.0, "every vertex's twin, with its confidence")
     twins = mirror_pairs(source, surface, forbidden, config)
+    doubtful = doubtful_map_warning(twins.report)
+    if doubtful is not None:
+        report["warnings"] = [doubtful]
+        warnings.warn(doubtful, SymblendWarning, stacklevel=3)
     if progress is not None:
         progress(100.0, "done")
     return _final(points, surface.representative, result, landmarks, report, stopped, clock, twins)

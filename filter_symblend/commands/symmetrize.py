@@ -51,7 +51,8 @@ def run(args) -> int:
     if "auto_pairs" in report:
         automatic_pairs = report["auto_pairs"]
         pairs += (f" + {automatic_pairs['pair_count']} automatic pairs ({len(automatic_pairs['rounds'])} rounds, "
-                  f"stopped: {automatic_pairs['stopped']})")
+                  f"stopped: {automatic_pairs['stopped']}; confident twins on "
+                  f"{automatic_pairs['mirror_map']['confident_share']:.0%} of the surface)")
     landmark_line = ""
     if "landmark_asymmetry_before" in report:
         before, after = report["landmark_asymmetry_before"], report["landmark_asymmetry_after"]

@@ -15,6 +15,9 @@ import numpy as np
 from .mesh_quantities import farthest_point_order
 
 CONFIDENT = 0.5  # a twin at or above this confidence counts as confident (see auto/confidence)
+# Below this share of the pairable surface with confident twins, a result built on the map warns: chosen on the
+# FAUST half of the mirror-map benchmark, checked on its TOSCA half (docs/benchmarks.md).
+DOUBTFUL_SHARE = 0.8
 
 
 @dataclasses.dataclass(frozen=True)

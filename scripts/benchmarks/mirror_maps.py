@@ -122,13 +122,23 @@ def pyfm_twins(points: np.ndarray, faces: np.ndarray):
 
 def landmark_output(points: np.ndarray, a: np.ndarray, b: np.ndarray, mode: str) -> np.ndarray:
     """The output from 100 ground-truth pairs spread by farthest-point sampling over the pairs whose two
-    sides lie apart (2 % of the diagonal)."""
+    sides lie apart (2 % of the diagonal), no vertex in two of them (the published twins are not always
+    mutual), each pair's left landmark on the same side."""
     diagonal = np.linalg.norm(np.ptp(points, axis=0))
     apart = np.flatnonzero((a != b) & (np.linalg.norm(points[a] - points[b], axis=1) > 0.02 * diagonal))
-    _, first = np.unique(np.minimum(a[apart], b[apart]), return_index=True)
-    apart = apart[first]
-    chosen = apart[farthest_point_order(points[a[apart]], min(100, len(apart)))]
-    return quiet(symmetrize, points, a[chosen], b[chosen], mode=mode).points
+    used, chosen = set(), []
+    for row in apart[farthest_point_order(points[a[apart]], len(apart))]:
+        if a[row] not in used and b[row] not in used:
+            used.update((a[row], b[row]))
+            chosen.append(row)
+            if len(chosen) == 100:
+                break
+    chosen = np.array(chosen)
+    left, right = a[chosen], b[chosen]
+    gaps = points[left] - points[right]  # each pair from the same side: along the principal direction of the gaps
+    swap = gaps @ np.linalg.eigh(gaps.T @ gaps)[1][:, -1] < 0
+    left, right = np.where(swap, right, left), np.where(swap, left, right)
+    return quiet(symmetrize, points, left, right, mode=mode).points
 
 
 def summary(errors: np.ndarray) -> str:
@@ -157,9 +167,9 @@ def mirror_maps_main(args) -> None:
         for name in names:
             points, faces, a, b = dataset.shape(folder, name)
             scale = np.sqrt(surface_area(points, faces))
-            start = time.perf_counter()
+            start, pairs = time.perf_counter(), None
             try:
-                pairs, result = None, quiet(symmetrize, points, faces=faces, pairs="auto", mode=args.mode)
+                result = quiet(symmetrize, points, faces=faces, pairs="auto", mode=args.mode)
                 pairs = result.mirror_pairs
                 seconds = time.perf_counter() - start
             except SymblendError as error:
