@@ -64,14 +64,14 @@ def evidence(mirror: MirrorMap, sources: np.ndarray, config: AutoConfig, toleran
     return twins, listed, errors
 
 
-def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, config: AutoConfig,
-                 report: dict | None = None) -> MirrorPairs:
+def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, config: AutoConfig) -> MirrorPairs:
     """The twins of every pairable vertex of ``geometry`` (the input surface; ``mirror`` may live on a
     symmetrized output of it) that ``mirror`` mirrors, none on or toward a ``forbidden`` (N,) bool vertex;
-    duplicates of a vertex take its twin. ``report``: what the run said of the map (merged in)."""
+    duplicates of a vertex take its twin."""
     tolerance = config.landing_tolerance * geometry.diagonal
     sources = np.flatnonzero(geometry.usable & ~forbidden)
     twins, listed, errors = evidence(mirror, sources, config, tolerance)
+    landed = np.count_nonzero(twins.landing <= tolerance)
     listed &= ~forbidden[twins.corners].any(axis=1)
     confidence = np.exp(-0.5 * np.sum(errors**2, axis=1))
     rows = np.flatnonzero(listed)
@@ -89,7 +89,8 @@ def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, co
     twin = np.einsum("kj,kji->ki", weights, geometry.points[corners])
     pairable = max(len(sources), 1)
     confident = confidence[listed] >= CONFIDENT
-    summary = {**(report or {}), "map": mirror.name, "twin_share": float(np.count_nonzero(listed) / pairable),
+    summary = {"map": mirror.name, "coverage": float(np.count_nonzero(listed) / pairable),
+               "consistency": float(np.count_nonzero(listed) / max(landed, 1)),
                "confident_share": float(np.count_nonzero(confident) / pairable),
                "confidence_threshold": CONFIDENT,
                "median_errors_in_spacings": dict(zip(("round_trip", "landing", "neighbours"),
