@@ -228,17 +228,22 @@ def test_a_point_cloud_without_faces_is_paired_by_its_points(blob):
 
 def test_a_shape_without_mirror_symmetry_is_refused_saying_how_much_mirrors():
     """pymeshlab's bunny: half of its surface lies within half a percent of its mirror image, the rest (ears,
-    head) far from it."""
+    head) far from it; and the mirror its spectrum offers does not keep its heat kernel signatures."""
     ms = pymeshlab.MeshSet()
     ms.load_new_mesh(str(SAMPLE_MESHES / "bunny.obj"))
     ms.meshing_decimation_quadric_edge_collapse(targetfacenum=10000)
     mesh = ms.current_mesh()
     with pytest.raises(SymmetryNotFoundError, match=r"No mirror symmetry found: the best mirror map \(.+\) mirrors "
                        r"\d+% of the surface within 1% of its size but \d+% within 0.25%, where a field fitted onto the "
-                       r"surface lands on a symmetric shape \(mirror plane \d+%.*needs 65% there\. Place "
-                       r"landmark pairs and use pairs='landmarks'") as raised:
-        symmetrize(mesh.vertex_matrix(), faces=mesh.face_matrix(), pairs="auto")
+                       r"surface lands on a symmetric shape \(mirror plane \d+%.*needs 65% there\. Its intrinsic "
+                       r"mirror does not keep the shape's heat kernel signatures \(disagreement 0\.\d\d, a symmetric "
+                       r"shape 0\.08 or less\): the shape has no intrinsic mirror symmetry\. Place landmark pairs and "
+                       r"use pairs='landmarks'") as raised:
+        symmetrize(mesh.vertex_matrix(), faces=mesh.face_matrix(), pairs="auto", mode="articulated")
     assert isinstance(raised.value, GeometryError)  # a SymblendError, a ValueError
+    with pytest.raises(SymmetryNotFoundError, match=r"needs 65% there\. If it is a posed body, mode='articulated' "
+                       r"pairs it by its intrinsic mirror\. Place landmark pairs"):
+        symmetrize(mesh.vertex_matrix(), faces=mesh.face_matrix(), pairs="auto")
 
 
 def test_a_map_that_mirrors_too_little_is_refused_with_every_share_listed(blob):

@@ -23,13 +23,15 @@ from scipy.sparse.csgraph import connected_components
 from ..core.geometry import reflection_across_plane
 from ..core.landmark_asymmetry import fit_mirror_plane
 from ..core.neighbourhoods import connecting_width, mean_nearest_spacing, pair_weights
-from ..core.symmetrize import CheckedLandmarks, SymmetrizationResult, scaled_progress, solve
-from ..errors import DegenerateNeighbourhoodError, GeometryError, SymblendWarning
+from ..core.mirror_planes import surface_mirror_planes
+from ..core.symmetrize import CheckedLandmarks, SymmetrizationResult, check_landmarks, scaled_progress, solve
+from ..errors import DegenerateNeighbourhoodError, GeometryError, SymblendWarning, SymmetryNotFoundError
 from ..parameters import CORE, options_of
 from .config import DEFAULT, AutoConfig
 from .field import MirrorField, field_centres, register
 from .confidence import doubtful_map_warning, mirror_pairs
 from .first_map import coverage, first_map
+from .intrinsic_start import cannot_start, intrinsic_start
 from .maps import MirrorMap, field_map, plane_map
 from .pairs import Constraints, as_landmarks, find_pairs, spread
 from .surface import Outline, Surface, build_surface
@@ -61,13 +63,45 @@ def _output_map(surface: Surface, result: SymmetrizationResult, sample: np.ndarr
     return field_map(output, start, "output mirror field")
 
 
+def plane_asymmetry(surface: Surface, normal: np.ndarray, offset: float, sample: np.ndarray) -> float:
+    """RMS distance of the ``sample`` vertices of ``surface`` to its reflection across the plane, / diagonal."""
+    mirrored = reflection_across_plane(surface.points[sample], np.asarray(normal), offset)
+    distance = surface.nearest_points(mirrored)[1]
+    return float(np.sqrt(np.mean(distance**2)) / surface.diagonal)
+
+
 def surface_asymmetry(surface: Surface, result: SymmetrizationResult, sample: np.ndarray) -> float:
     """RMS distance of the ``sample`` vertices of the output to its reflection across its plane, / diagonal."""
-    output = surface.moved(result.points)
-    mirrored = reflection_across_plane(output.points[sample], np.asarray(result.report["plane_normal"]),
-                                       result.report["plane_offset"])
-    distance = output.nearest_points(mirrored)[1]
-    return float(np.sqrt(np.mean(distance**2)) / output.diagonal)
+    return plane_asymmetry(surface.moved(result.points), result.report["plane_normal"], result.report["plane_offset"],
+                           sample)
+
+
+INTRINSIC_START_WARNING = (
+    "no map of space mirrors enough of this shape; it was paired by its intrinsic mirror (a posed body), which "
+    "can mistake one symmetry for another: check the result, or the pairs (symblend pairs MESH -o pairs.pp; "
+    "find_mirror_pairs in Python), and correct them in MeshLab's PickPoints.")
+
+
+def _intrinsic_first_output(points, surface, core, scored, config, refusal, progress):
+    """The output of the intrinsic mirror's vertex pairs when no map mirrors enough of the surface
+    (:mod:`.intrinsic_start`) and what was tried; the refusal, with the reason, if they give none."""
+    if progress is not None:
+        progress(10.0, "no map mirrors enough of the surface: the intrinsic mirror's own pairs")
+
+    def solve_pairs(left, right):
+        ones = np.ones(len(left))
+        checked = check_landmarks(points, left, right, np.arange(1, len(left) + 1), None, ones, ones)
+        return solve(points, checked, _connected_options(points, checked, core), warn=False)
+
+    normal, offset = surface_mirror_planes(surface.points[surface.usable_index])[0]
+    before = plane_asymmetry(surface, normal, offset, scored)
+    result, tried = intrinsic_start(surface, config, solve_pairs, lambda out: surface_asymmetry(surface, out, scored),
+                                    before)
+    if result is None:
+        found, advice, rest = str(refusal).partition(" Place landmark pairs")
+        raise SymmetryNotFoundError(f"{found} {cannot_start(tried, before)}{advice}{rest}") from None
+    tried.update(input_asymmetry=before, refused_maps=str(refusal))
+    return result, tried
 
 
 def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, landmarks: CheckedLandmarks | None = None,
@@ -95,9 +129,21 @@ def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, l
     registration = spread(points, surface.usable_index, config.registration_samples)
     report = {"excluded_vertices": int(0 if excluded is None else len(excluded))}
     if landmarks is None:
-        mirror, coverage, plane = first_map(surface, scored, config, scaled_progress(progress, 0.0, 30.0))
-        report.update(coverage=coverage, surface_plane={"normal": plane[0].tolist(), "offset": plane[1]})
-        result, best = None, np.inf
+        try:
+            mirror, coverage, plane = first_map(surface, scored, config, scaled_progress(progress, 0.0, 30.0))
+            report.update(coverage=coverage, surface_plane={"normal": plane[0].tolist(), "offset": plane[1]})
+            result, best = None, np.inf
+        except SymmetryNotFoundError as refusal:  # a strongly posed body, or a shape with no mirror symmetry
+            if core["mode"] != "articulated":  # the intrinsic mirror holds under isometries: a pose, not a compression
+                found, advice, rest = str(refusal).partition(" Place landmark pairs")
+                raise SymmetryNotFoundError(f"{found} If it is a posed body, mode='articulated' pairs it by its "
+                                            f"intrinsic mirror.{advice}{rest}") from None
+            result, report["intrinsic_start"] = _intrinsic_first_output(points, surface, core, scored, config,
+                                                                         refusal, progress)
+            best = surface_asymmetry(surface, result, scored)
+            report["rounds"] = [{"intrinsic_start": True, "surface_asymmetry": best}]
+            report["warnings"] = [INTRINSIC_START_WARNING]
+            mirror = _output_map(surface, result, registration, config)
     else:
         result = solve(points, landmarks, core, scaled_progress(progress, 0.0, 20.0))
         best = surface_asymmetry(surface, result, scored)
@@ -171,8 +217,9 @@ def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, l
     twins = mirror_pairs(source, surface, forbidden, config)
     doubtful = doubtful_map_warning(twins.report)
     if doubtful is not None:
-        report["warnings"] = [doubtful]
-        warnings.warn(doubtful, SymblendWarning, stacklevel=3)
+        report.setdefault("warnings", []).append(doubtful)
+    for message in report.get("warnings", []):
+        warnings.warn(message, SymblendWarning, stacklevel=3)
     if progress is not None:
         progress(100.0, "done")
     return _final(points, surface.representative, result, landmarks, report, stopped, clock, twins)
@@ -184,7 +231,8 @@ def _final(points, representative, result, landmarks, report, stopped, clock, tw
     final = result.report
     user_pairs = 0 if landmarks is None else len(landmarks.left)
     user_midline = 0 if landmarks is None else len(landmarks.midline)
-    kept = [entry for entry in report["rounds"] if entry.get("kept", True) and not entry.get("landmarks_only")]
+    kept = [entry for entry in report["rounds"]
+            if entry.get("kept", True) and not entry.get("landmarks_only") and not entry.get("intrinsic_start")]
     report.update(stopped=stopped, pair_count=int(final["pair_count"] - user_pairs),
                   midline_count=int(final["midline_count"] - user_midline),
                   twins_are=kept[-1]["twins_are"] if kept else None,

@@ -15,6 +15,7 @@ import numpy as np
 from .mesh_quantities import farthest_point_order
 
 CONFIDENT = 0.5  # a twin at or above this confidence counts as confident (see auto/confidence)
+APART = 0.02  # x diagonal: a landmark pair closer than this says little about the mirror and snaps ambiguously
 # Below this share of the pairable surface with confident twins, a result built on the map warns: chosen on the
 # FAUST half of the mirror-map benchmark, checked on its TOSCA half (docs/benchmarks.md).
 DOUBTFUL_SHARE = 0.8
@@ -58,14 +59,14 @@ def pairs_to_check(pairs: MirrorPairs, points: np.ndarray, count: int,
     """Rows into ``pairs`` (c,): up to ``count`` of the confident pairs spread evenly over the surface
     (farthest-point order), each once, from its vertex on the left side of the shape.
 
-    Pairs whose two points lie closer than 2 % of the bounding-box ``diagonal`` of ``points`` (N, 3) are
-    left out: a landmark pair that close to the midline says little about the mirror and snaps ambiguously.
+    Pairs whose two points lie closer than ``APART`` of the bounding-box diagonal of ``points`` (N, 3) are
+    left out.
     The side is the sign of the pair's gap along the principal direction of all the gaps (the mirror
     direction, bent shapes included, as long as no part is turned over)."""
     points = np.asarray(points, dtype=float)
     diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
     gaps = points[pairs.vertex] - pairs.twin
-    apart = np.linalg.norm(gaps, axis=1) > 0.02 * diagonal
+    apart = np.linalg.norm(gaps, axis=1) > APART * diagonal
     eligible = np.flatnonzero(pairs.confident(threshold) & apart)
     if not len(eligible):
         return eligible

@@ -162,7 +162,7 @@ def mirror_maps_main(args) -> None:
     print("| shape | auto: mean | median | <= 0.05 | <= 0.10 | confident share | low conf. finds | warns | s "
           "| pyFM: mean | median | <= 0.05 | <= 0.10 | s | symmetry: input | auto | 100 landmarks | auto / landmarks |")
     print("|" + "---|" * 19)
-    totals = {"auto": [], "pyfm": [], "ratio": [], "wrong_total": 0, "wrong_found": 0}
+    totals = {"auto": [], "pyfm": [], "ratio": [], "wrong_total": 0, "wrong_found": 0, "far_total": 0, "far_found": 0}
     for folder, names in shapes.items():
         for name in names:
             points, faces, a, b = dataset.shape(folder, name)
@@ -183,6 +183,9 @@ def mirror_maps_main(args) -> None:
                 doubtful = confidence[np.concatenate([a, b])] < CONFIDENT
                 totals["wrong_total"] += int(wrong.sum())
                 totals["wrong_found"] += int((wrong & doubtful).sum())
+                far = errors > 2 * WRONG
+                totals["far_total"] += int(far.sum())
+                totals["far_found"] += int((far & doubtful).sum())
                 finds = f"{np.mean(doubtful[wrong]):.0%} of {wrong.sum()}" if wrong.any() else "none wrong"
                 warns = "yes" if result.report["auto_pairs"].get("warnings") else "no"
                 auto = (f"{summary(errors)} | {pairs.report['confident_share']:.0%} | {finds} | {warns} | "
@@ -206,7 +209,7 @@ def mirror_maps_main(args) -> None:
     medians = np.array(totals["auto"])
     print(f"\nshapes {len(medians)}; refused {int(np.sum(~np.isfinite(medians)))}; median twin error > {WRONG}: "
           f"{int(np.sum(medians > WRONG))}; wrong twins with low confidence: {totals['wrong_found']} of "
-          f"{totals['wrong_total']}")
+          f"{totals['wrong_total']} (wrong by > {2 * WRONG}: {totals['far_found']} of {totals['far_total']})")
     ratios = np.array(totals["ratio"])
     finite = ratios[np.isfinite(ratios)]
     if len(finite):

@@ -1,0 +1,118 @@
+"""When no map mirrors enough of the surface of a posed body: the intrinsic mirror's own vertex pairs, solved, as
+the first output (in ``mode='articulated'`` only: the intrinsic mirror holds under isometries, a pose, and not
+under a compression, where it pairs wrongly and the rounds cannot tell).
+
+A body whose limbs are swung far (FAUST's most posed humans, a crouching man) defeats every extrinsic
+map, and the intrinsic mirror used as a map of space (:mod:`.intrinsic_map`) mixes parts that touch (an
+arm along the torso). Its vertex pairs themselves are mostly right, for some sizes of the first
+functional map and not for others (the sign solve of :func:`.spectral.mirror_functional_map` is
+sensitive to the basis size when the pose is strong). So each size of ``STARTS`` gives a vertex map,
+refined by ZoomOut, and:
+
+- the shape must be intrinsically symmetric: the map keeps the heat kernel signatures,
+  ``median |log HKS(x) - log HKS(m(x))|`` at most ``DESCRIPTOR_AGREEMENT`` x the same median between
+  random vertices. A mirror found by the sign solve on a shape that has none (a bunny, a CAD part) leaves
+  them unequal;
+- its mutual pairs whose sides lie apart (``APART`` of the diagonal), ``PAIRS`` of them spread evenly,
+  each from its left side, are solved by the paper's method;
+- the output that is most mirror-symmetric is kept, if it is more symmetric than the input.
+
+The rounds then pair that output again, where extrinsic maps work (:mod:`.rounds`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..core.mesh_quantities import farthest_point_order
+from ..core.mirror_pairs import APART
+from ..core.symmetrize import SymmetrizationResult
+from ..errors import SymblendError
+from .config import AutoConfig
+from .spectral import eigenbasis, heat_kernel_signatures, mirror_functional_map, point_map, working_mesh, zoomout
+from .surface import Surface
+
+STARTS = (8, 12, 16, 20, 24)  # first functional map sizes tried (eigenfunctions), up to 40 % of spectral_functions
+# Symmetric shapes, posed or not, measured 0.011-0.055 (FAUST humans, homer); shapes with no mirror symmetry
+# 0.12-0.22 (the Stanford bunny, fandisk): the bound lies between, at their geometric middle (docs/benchmarks.md).
+DESCRIPTOR_AGREEMENT = 0.08
+PAIRS = 300  # pairs solved per start: a coarse intrinsic map gives a few hundred sound ones on a 5,000-vertex body
+
+
+def descriptor_disagreement(signatures: np.ndarray, vertex_map: np.ndarray) -> float:
+    """median |log s(x) - log s(m(x))| / median |log s(x) - log s(y)| over random pairs (x, y): 0 for a map
+    that keeps the signatures ``signatures`` (n, d) > 0, about 1 for a random map."""
+    logs = np.log(signatures)
+    shuffled = np.random.default_rng(0).permutation(len(logs))
+    return float(np.median(np.abs(logs - logs[vertex_map])) / np.median(np.abs(logs - logs[shuffled])))
+
+
+def _left_pairs(points: np.ndarray, vertex_map: np.ndarray, diagonal: float) -> np.ndarray:
+    """Up to PAIRS vertices (k,) of ``points`` (n, 3) spread evenly, each the left side of a mutual pair of
+    ``vertex_map`` (n,) whose sides lie APART of the ``diagonal`` apart."""
+    gaps = points - points[vertex_map]
+    apart = np.flatnonzero((vertex_map[vertex_map] == np.arange(len(points)))
+                           & (np.linalg.norm(gaps, axis=1) > APART * diagonal))
+    if len(apart) < 4:
+        return apart
+    direction = np.linalg.eigh(gaps[apart].T @ gaps[apart])[1][:, -1]
+    left = apart[gaps[apart] @ direction > 0]
+    return left[farthest_point_order(points[left], min(PAIRS, len(left)))]
+
+
+def intrinsic_start(surface: Surface, config: AutoConfig, solve_pairs: Callable[[np.ndarray, np.ndarray], SymmetrizationResult],
+                    asymmetry_of: Callable[[SymmetrizationResult], float], input_asymmetry: float):
+    """(the most symmetric output of the intrinsic vertex pairs, what was tried) or (None, what was tried);
+    see the module doc. ``solve_pairs(left, right)``: the paper's solve on vertex pairs of the input;
+    ``asymmetry_of(result)``: an output's mirror asymmetry, comparable to ``input_asymmetry``."""
+    tried = {"starts": {}}
+    if not surface.is_mesh:
+        return None, tried
+    mesh = working_mesh(surface.points, surface.faces[surface.triangles], surface.usable, config)
+    basis = None if mesh is None else eigenbasis(mesh.points, mesh.faces, config.spectral_functions)
+    if basis is None:
+        return None, tried
+    signatures = heat_kernel_signatures(basis, config.descriptor_scales)
+    # each vertex of the working mesh stands for the usable input vertex nearest it
+    vertex_of = surface.usable_index[surface.vertex_tree.query(mesh.points)[1]]
+    best, best_asymmetry = None, input_asymmetry
+    for start in STARTS:
+        if start + 2 > len(basis.values):
+            break
+        functional = mirror_functional_map(mesh.points, mesh.faces, basis, start, config)
+        vertex_map = zoomout(basis, point_map(basis.functions[:, :start], functional), start, len(basis.values),
+                             config.zoomout_step)
+        entry = tried["starts"][start] = {"descriptor_disagreement": descriptor_disagreement(signatures, vertex_map)}
+        if entry["descriptor_disagreement"] > DESCRIPTOR_AGREEMENT:
+            continue
+        left = _left_pairs(mesh.points, vertex_map, surface.diagonal)
+        left, right = vertex_of[left], vertex_of[vertex_map[left]]
+        distinct = left != right
+        entry["pairs"] = int(np.count_nonzero(distinct))
+        if entry["pairs"] < 4:
+            continue
+        try:
+            result = solve_pairs(left[distinct], right[distinct])
+        except SymblendError as error:  # pairs that fall apart, or a degenerate neighbourhood: not this start
+            entry["refused"] = str(error)
+            continue
+        entry["surface_asymmetry"] = asymmetry_of(result)
+        if entry["surface_asymmetry"] < best_asymmetry:
+            best, best_asymmetry, tried["chosen"] = result, entry["surface_asymmetry"], start
+    return best, tried
+
+
+def cannot_start(tried: dict, input_asymmetry: float) -> str:
+    """Why the intrinsic pairs gave no first output, in one sentence (for the refusal's message)."""
+    starts = tried["starts"]
+    if not starts:
+        return "The shape's intrinsic mirror could not be computed (a point cloud, or no spectrum)."
+    least = min(entry["descriptor_disagreement"] for entry in starts.values())
+    if least > DESCRIPTOR_AGREEMENT:
+        return (f"Its intrinsic mirror does not keep the shape's heat kernel signatures (disagreement {least:.2f}, "
+                f"a symmetric shape {DESCRIPTOR_AGREEMENT:g} or less): the shape has no intrinsic mirror symmetry.")
+    return (f"Its intrinsic mirror's pairs leave it no more symmetric than it is (mirror asymmetry "
+            f"{100 * input_asymmetry:.2g} % of the diagonal).")
