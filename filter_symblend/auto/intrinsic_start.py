@@ -25,7 +25,6 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ..core.mesh_quantities import farthest_point_order
 from ..core.mirror_pairs import APART

@@ -1,14 +1,17 @@
 """Automatic pairs, round by round: a mirror map, the pairs it gives, the paper's solve; again on the output.
 
 The first map comes from the input (:mod:`.first_map`: candidates, each registered, one score; with
-landmarks, the landmarks' solve and a field registered on its output). Each round pairs a spread
-sample under the current map (:mod:`.pairs`) and solves, with the same checks and solve as a user's
-landmarks, on the input. Where the map left part of the surface without twins (a strong bend with a
+landmarks, the landmarks' solve and a field registered on its output). When no map mirrors enough of the
+surface, ``mode='articulated'`` starts from the solve of the intrinsic mirror's own vertex pairs
+(:mod:`.intrinsic_start`: a posed body) and maps its output; other modes refuse. Each round pairs a
+spread sample under the current map (:mod:`.pairs`) and solves, with the same checks and solve as a
+user's landmarks, on the input. Where the map left part of the surface without twins (a strong bend with a
 compression, a shape only partly mirrored by the first map), the output is more symmetric than the
 input, so the next map is a field registered on the output, from its own plane, and pairs more of it.
 The rounds stop when the map pairs ``plane_suffices`` of the sample, when the output no longer moves,
 or when a round leaves it less mirror-symmetric than the one before (that round is not kept). The last
-solve takes ``auto_pair_count`` pairs from the best round's map.
+solve takes ``auto_pair_count`` pairs from the best round's map. Every result carries that map: each
+vertex's twin with a confidence (:mod:`.confidence`).
 """
 
 from __future__ import annotations
@@ -76,6 +79,12 @@ def surface_asymmetry(surface: Surface, result: SymmetrizationResult, sample: np
                            sample)
 
 
+def _refusal_saying(refusal: SymmetryNotFoundError, sentence: str) -> SymmetryNotFoundError:
+    """``refusal`` with ``sentence`` said before its advice (to place landmark pairs)."""
+    found, advice, rest = str(refusal).partition(" Place landmark pairs")
+    return SymmetryNotFoundError(f"{found} {sentence}{advice}{rest}")
+
+
 INTRINSIC_START_WARNING = (
     "no map of space mirrors enough of this shape; it was paired by its intrinsic mirror (a posed body), which "
     "can mistake one symmetry for another: check the result, or the pairs (symblend pairs MESH -o pairs.pp; "
@@ -98,8 +107,7 @@ def _intrinsic_first_output(points, surface, core, scored, config, refusal, prog
     result, tried = intrinsic_start(surface, config, solve_pairs, lambda out: surface_asymmetry(surface, out, scored),
                                     before)
     if result is None:
-        found, advice, rest = str(refusal).partition(" Place landmark pairs")
-        raise SymmetryNotFoundError(f"{found} {cannot_start(tried, before)}{advice}{rest}") from None
+        raise _refusal_saying(refusal, cannot_start(tried, before)) from None
     tried.update(input_asymmetry=before, refused_maps=str(refusal))
     return result, tried
 
@@ -135,9 +143,8 @@ def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, l
             result, best = None, np.inf
         except SymmetryNotFoundError as refusal:  # a strongly posed body, or a shape with no mirror symmetry
             if core["mode"] != "articulated":  # the intrinsic mirror holds under isometries: a pose, not a compression
-                found, advice, rest = str(refusal).partition(" Place landmark pairs")
-                raise SymmetryNotFoundError(f"{found} If it is a posed body, mode='articulated' pairs it by its "
-                                            f"intrinsic mirror.{advice}{rest}") from None
+                raise _refusal_saying(refusal, "If it is a posed body, mode='articulated' pairs it by its intrinsic "
+                                               "mirror.") from None
             result, report["intrinsic_start"] = _intrinsic_first_output(points, surface, core, scored, config,
                                                                          refusal, progress)
             best = surface_asymmetry(surface, result, scored)

@@ -26,7 +26,7 @@ import time
 
 import numpy as np
 
-from filter_symblend import SymblendError, find_mirror_pairs, symmetrize
+from filter_symblend import SymblendError, symmetrize
 from filter_symblend.core.landmark_asymmetry import fit_mirror_plane
 from filter_symblend.core.mesh_quantities import farthest_point_order
 from filter_symblend.core.mirror_pairs import CONFIDENT
