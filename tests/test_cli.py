@@ -633,3 +633,25 @@ def test_a_loaded_mesh_with_non_finite_coordinates_is_refused(tmp_path):
     with pytest.raises(SymblendError, match=r"scan.stl: vertex 2 has non-finite coordinates \(1 such vertices\); "
                                             r"repair the mesh"):
         check_loaded_mesh(tmp_path / "scan.stl", points, np.array([[0, 1, 2]]))
+
+
+def test_sigterm_while_the_output_is_written_exits_143_and_leaves_nothing(tmp_path, bent_cow_files):
+    """A batch scheduler's SIGTERM arriving while the output mesh is being written (here: right after
+    pymeshlab wrote the temporary file): one line, status 143, no output and no partial file."""
+    mesh_path, landmark_path, *_ = bent_cow_files
+    output = tmp_path / "out.ply"
+    code = ("import os, signal, sys, time, pymeshlab\n"
+            "from filter_symblend.commands.main import main\n"
+            "original = pymeshlab.MeshSet.save_current_mesh\n"
+            "def written_then_terminated(self, *args, **kwargs):\n"
+            "    original(self, *args, **kwargs)\n"
+            "    os.kill(os.getpid(), signal.SIGTERM)\n"
+            "    time.sleep(5)\n"
+            "pymeshlab.MeshSet.save_current_mesh = written_then_terminated\n"
+            "sys.exit(main(sys.argv[1:]))\n")
+    before = sorted(p.name for p in tmp_path.iterdir())
+    done = subprocess.run([sys.executable, "-c", code, "symmetrize", str(mesh_path), "-l", str(landmark_path),
+                           "-o", str(output)], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 143, done.stderr
+    assert done.stderr.endswith("symblend: terminated; no output written\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == before  # no out.ply, no .out.symblend-partial.ply

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import signal
 import sys
+import threading
 import warnings
 
 from ..errors import SymblendError, SymblendWarning
@@ -31,9 +32,21 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (a batch scheduler, a cluster's time limit), raised where Python next runs: the run stops as on
+    Ctrl-C, every partial output removed on the way out."""
+
+
+def _terminate(signum, frame) -> None:
+    raise Terminated()
+
+
 def main(argv=None) -> int:
-    """Exit status: 0 done, 1 bad input (one line on stderr, nothing written), 2 usage, 130 interrupted."""
+    """Exit status: 0 done, 1 bad input (one line on stderr, nothing written), 2 usage, 130 interrupted,
+    143 terminated (SIGTERM)."""
     signal.signal(signal.SIGINT, signal.default_int_handler)  # start-up is over: Ctrl-C is KeyboardInterrupt
+    in_main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _terminate) if in_main_thread else None
     try:
         args = build_parser().parse_args(argv)
         with warnings.catch_warnings():
@@ -49,7 +62,13 @@ def main(argv=None) -> int:
     except OSError as error:
         print(f"symblend: error: {error.filename}: {error.strerror}", file=sys.stderr)
         return 1
+    except Terminated:
+        print("symblend: terminated; no output written", file=sys.stderr)
+        return 143
     except KeyboardInterrupt:
         print("symblend: interrupted; no output written", file=sys.stderr)
         return 130
+    finally:
+        if in_main_thread:
+            signal.signal(signal.SIGTERM, previous)  # main() called from Python leaves the caller's handler
 
