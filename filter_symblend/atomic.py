@@ -18,8 +18,20 @@ def replaced_when_done(path: str | os.PathLike) -> Iterator[pathlib.Path]:
     try:
         yield temporary
         os.replace(temporary, path)
+    except OSError as error:
+        if error.filename is None:  # a full disk says so on write or close, naming no file: name the one written
+            raise OSError(error.errno, error.strerror, str(path)) from error
+        raise
     finally:
         temporary.unlink(missing_ok=True)
+
+
+@contextlib.contextmanager
+def all_or_none(paths: list) -> Iterator[list]:
+    """Temporary paths for ``paths`` (None stays None): when the block ends without error all of them
+    replace their paths, else none does (a run's outputs are one result: no mesh without its report)."""
+    with contextlib.ExitStack() as stack:
+        yield [None if path is None else stack.enter_context(replaced_when_done(path)) for path in paths]
 
 
 def write_text(path: str | os.PathLike, text: str) -> None:

@@ -655,3 +655,24 @@ def test_sigterm_while_the_output_is_written_exits_143_and_leaves_nothing(tmp_pa
     assert done.returncode == 143, done.stderr
     assert done.stderr.endswith("symblend: terminated; no output written\n")
     assert sorted(p.name for p in tmp_path.iterdir()) == before  # no out.ply, no .out.symblend-partial.ply
+
+
+def test_a_report_that_cannot_be_written_leaves_no_mesh_either(tmp_path, bent_cow_files, capsys, monkeypatch):
+    """A full disk when the report is written (after the mesh): one line naming the report and the reason,
+    status 1, and neither the mesh nor the report nor a partial file is left (the outputs are one result)."""
+    import errno
+    mesh_path, landmark_path, *_ = bent_cow_files
+    output, report = tmp_path / "out.ply", tmp_path / "report.json"
+    original = pathlib.Path.write_text
+
+    def disk_full_for_json(self, *args, **kwargs):
+        if self.suffix == ".json":
+            raise OSError(errno.ENOSPC, "No space left on device")  # as a write() or close() raises it: no file name
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(pathlib.Path, "write_text", disk_full_for_json)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "-o", str(output),
+                 "--report", str(report)]) == 1
+    assert capsys.readouterr().err == f"symblend: error: {report}: No space left on device\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == before

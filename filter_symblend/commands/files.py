@@ -10,7 +10,7 @@ import pathlib
 import numpy as np
 import pymeshlab
 
-from ..atomic import replaced_when_done, write_text
+from ..atomic import all_or_none, replaced_when_done, write_text
 from ..errors import SymblendError
 from ..meshlab.attributes import custom_attribute_names
 from ..meshlab.ply_attributes import load_mesh_with_attributes
@@ -121,19 +121,36 @@ def load_mesh(path: pathlib.Path, ms: pymeshlab.MeshSet | None = None) -> pymesh
     return ms
 
 
-def save_atomically(ms: pymeshlab.MeshSet, output: pathlib.Path) -> None:
-    """Save the current mesh to a temporary name beside ``output``, then rename it. A PLY keeps
-    quality and every custom per-vertex attribute (scalars, and points such as the automatic pairs' twins)."""
+def save_mesh(ms: pymeshlab.MeshSet, path: pathlib.Path, output: pathlib.Path | None = None) -> None:
+    """Save the current mesh to ``path`` (a temporary name for ``output``, whose name messages give). A PLY
+    keeps quality and every custom per-vertex attribute (scalars, and points such as the automatic pairs'
+    twins)."""
+    output = output or path
     options = {}
     if output.suffix.lower() == ".ply":
         names = custom_attribute_names(ms)
         options = {"save_vertex_quality": True, **{f"__ca_{kind}__{name}": True for kind in ("vs", "vp")
                                                    for name in names[kind]}}
     try:
-        with replaced_when_done(output) as temporary:
-            ms.save_current_mesh(str(temporary), **options)
+        ms.save_current_mesh(str(path), **options)
     except pymeshlab.PyMeshLabException as error:
-        raise SymblendError(f"{output}: pymeshlab cannot write it ({one_line(error)}).") from None
+        raise SymblendError(f"{output}: pymeshlab cannot write it ({one_line(error)}; is the disk full?).") from None
+
+
+def save_atomically(ms: pymeshlab.MeshSet, output: pathlib.Path) -> None:
+    """Save the current mesh (see :func:`save_mesh`) to a temporary name beside ``output``, then rename it."""
+    with replaced_when_done(output) as temporary:
+        save_mesh(ms, temporary, output)
+
+
+def save_with_report(ms: pymeshlab.MeshSet, output: pathlib.Path, report_path: pathlib.Path | None,
+                     report: dict) -> None:
+    """The output mesh and its JSON report (if ``report_path``), both written or neither."""
+    text = None if report_path is None else report_json(report)  # any fault of the report's before any write
+    with all_or_none([output, report_path]) as (mesh_temporary, report_temporary):
+        save_mesh(ms, mesh_temporary, output)
+        if report_temporary is not None:
+            report_temporary.write_text(text, encoding="utf-8")
 
 
 def save_quality_ply(ms: pymeshlab.MeshSet, path: pathlib.Path, quality: np.ndarray) -> None:
@@ -145,10 +162,15 @@ def save_quality_ply(ms: pymeshlab.MeshSet, path: pathlib.Path, quality: np.ndar
     save_atomically(scratch, path)
 
 
+def report_json(report: dict) -> str:
+    """``report`` as the text of a JSON file."""
+    return json.dumps(report, indent=2, default=_jsonable) + "\n"
+
+
 def write_report(path: pathlib.Path | None, report: dict) -> None:
     """Write ``report`` as JSON to ``path`` (if given) under a temporary name, then rename it."""
     if path:
-        write_text(path, json.dumps(report, indent=2, default=_jsonable) + "\n")
+        write_text(path, report_json(report))
 
 
 def _jsonable(value):

@@ -12,7 +12,7 @@ from ..meshlab.mlx import read_filter_script, symblend_options
 from ..meshlab.script_runner import apply_filter_script
 from ..parameters import DEFAULTS
 from .console import progress_display
-from .files import check_outputs, load_mesh, save_atomically, write_report
+from .files import check_outputs, load_mesh, save_with_report
 from .landmark_input import write_landmarks
 from .options import add_landmark_options, add_missing_option
 
@@ -54,7 +54,6 @@ def run(args) -> int:
     for number, step in enumerate(steps, start=1):
         if "translated" in step:
             print(f"{args.script}, filter {number}: {step['translated']}", file=sys.stderr)
-    save_atomically(ms, args.output)
-    write_report(args.report, {"script": str(args.script), "landmarks": landmarks, "steps": steps})
+    save_with_report(ms, args.output, args.report, {"script": str(args.script), "landmarks": landmarks, "steps": steps})
     print(f"{args.output}: {len(steps)} filters of {args.script} applied")
     return 0

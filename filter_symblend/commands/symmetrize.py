@@ -9,7 +9,7 @@ from ..errors import SymblendError
 from ..meshlab.meshset_filter import generate_symmetrized_mesh
 from ..parameters import PARAMETERS
 from .console import progress_display
-from .files import check_outputs, load_mesh, save_atomically, write_report
+from .files import check_outputs, load_mesh, save_with_report
 from .landmark_input import write_landmarks
 from .options import add_symmetrize_arguments
 
@@ -39,8 +39,7 @@ def symmetrize_files(args, progress=None):
         params["width_spacing"] = landmarks["placed_point_spacing"]  # semilandmarks leave the widths as they were
     report = generate_symmetrized_mesh(ms, progress, **params)
     report["landmarks"] = landmarks
-    save_atomically(ms, args.output)
-    write_report(args.report, report)
+    save_with_report(ms, args.output, args.report, report)
     return report, ms
 
 
