@@ -676,3 +676,25 @@ def test_a_report_that_cannot_be_written_leaves_no_mesh_either(tmp_path, bent_co
                  "--report", str(report)]) == 1
     assert capsys.readouterr().err == f"symblend: error: {report}: No space left on device\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_file_names_that_are_not_utf8_work(tmp_path, bent_cow_files, capsys):
+    """Linux file names are bytes: 'caf\\xe9 cow.obj' (Latin-1) is read, symmetrized and written like any other,
+    with nothing left beside it (pymeshlab, which takes UTF-8 text, is given ASCII names)."""
+    import os
+    import shutil
+    mesh_path, landmark_path, *_ = bent_cow_files
+    folder = tmp_path / "latin1"
+    folder.mkdir()
+    mesh = folder / os.fsdecode(b"caf\xe9 cow.obj")
+    landmarks = folder / os.fsdecode(b"caf\xe9 cow_picked_points.pp")
+    shutil.copy(mesh_path, mesh)
+    shutil.copy(landmark_path, landmarks)
+    output, report = folder / os.fsdecode(b"caf\xe9 out.ply"), folder / os.fsdecode(b"r\xe9port.json")
+    assert main(["symmetrize", str(mesh), "-l", str(landmarks), "-o", str(output), "--report", str(report)]) == 0
+    assert "80 landmark pairs" in capsys.readouterr().out
+    assert sorted(os.listdir(os.fsencode(folder))) == sorted(
+        [b"caf\xe9 cow.obj", b"caf\xe9 cow_picked_points.pp", b"caf\xe9 out.ply", b"r\xe9port.json"])
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(shutil.copy(output, tmp_path / "check.ply")))
+    assert ms.current_mesh().vertex_number() == len(bent_cow_files[2])

@@ -3,9 +3,11 @@ included), and every output written under a temporary name, then renamed."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import pathlib
+from collections.abc import Iterator
 
 import numpy as np
 import pymeshlab
@@ -108,13 +110,39 @@ def check_outputs(args, outputs: dict[str, pathlib.Path | None], inputs: list[pa
             raise SymblendError(f"{list(given.values())[index]}: given for two outputs; give each its own file.")
 
 
+def _utf8(path: pathlib.Path) -> bool:
+    """Whether pymeshlab (which takes UTF-8 text) can be given ``path``: a Linux file name is any bytes."""
+    try:
+        str(path).encode("utf-8")
+        return True
+    except UnicodeEncodeError:
+        return False
+
+
+@contextlib.contextmanager
+def _readable_name(path: pathlib.Path) -> Iterator[pathlib.Path]:
+    """``path``, or when pymeshlab cannot take its name, a link to it with an ASCII name in the same folder
+    (an OBJ's material and texture files are found beside it), removed afterwards."""
+    if _utf8(path):
+        yield path
+        return
+    alias = path.with_name(f".symblend-reading-{os.getpid()}{path.suffix.encode('ascii', 'ignore').decode()}")
+    os.symlink(path.resolve(), alias)
+    try:
+        yield alias
+    finally:
+        alias.unlink(missing_ok=True)
+
+
 def load_mesh(path: pathlib.Path, ms: pymeshlab.MeshSet | None = None) -> pymeshlab.MeshSet:
-    """``path`` loaded as a new layer of ``ms`` (a new MeshSet by default), PLY attributes included."""
+    """``path`` loaded as a new layer of ``ms`` (a new MeshSet by default), PLY attributes included; any
+    file name the file system accepts."""
     if not path.is_file():
         raise SymblendError(f"{path}: no such mesh file.")
     ms = pymeshlab.MeshSet() if ms is None else ms
     try:
-        load_mesh_with_attributes(ms, path)
+        with _readable_name(path) as readable:
+            load_mesh_with_attributes(ms, readable)
     except pymeshlab.PyMeshLabException as error:
         raise SymblendError(f"{path}: pymeshlab cannot read it ({one_line(error)}).") from None
     check_loaded_mesh(path, ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix())
@@ -132,7 +160,15 @@ def save_mesh(ms: pymeshlab.MeshSet, path: pathlib.Path, output: pathlib.Path | 
         options = {"save_vertex_quality": True, **{f"__ca_{kind}__{name}": True for kind in ("vs", "vp")
                                                    for name in names[kind]}}
     try:
-        ms.save_current_mesh(str(path), **options)
+        if _utf8(path):
+            ms.save_current_mesh(str(path), **options)
+        else:  # pymeshlab writes an ASCII name beside it, renamed to ``path``
+            ascii_name = path.with_name(f".symblend-writing-{os.getpid()}{path.suffix.encode('ascii', 'ignore').decode()}")
+            try:
+                ms.save_current_mesh(str(ascii_name), **options)
+                os.replace(ascii_name, path)
+            finally:
+                ascii_name.unlink(missing_ok=True)
     except pymeshlab.PyMeshLabException as error:
         raise SymblendError(f"{output}: pymeshlab cannot write it ({one_line(error)}; is the disk full?).") from None
 

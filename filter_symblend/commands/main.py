@@ -45,6 +45,9 @@ def main(argv=None) -> int:
     """Exit status: 0 done, 1 bad input (one line on stderr, nothing written), 2 usage, 130 interrupted,
     143 terminated (SIGTERM)."""
     signal.signal(signal.SIGINT, signal.default_int_handler)  # start-up is over: Ctrl-C is KeyboardInterrupt
+    for stream in (sys.stdout, sys.stderr):  # a file name that is not UTF-8 is printed escaped, not a traceback
+        if hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors="backslashreplace")
     in_main_thread = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _terminate) if in_main_thread else None
     try:
