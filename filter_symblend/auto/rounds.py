@@ -127,6 +127,11 @@ def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, l
         forbidden[np.concatenate([landmarks.left, landmarks.right, landmarks.midline])] = True
     surface = build_surface(points, faces, excluded=np.flatnonzero(forbidden), config=config)
     if len(surface.usable_index) < 4:
+        if isinstance(surface, Outline):
+            raise GeometryError(f"The mesh is flat (every vertex in one plane), so its outline is what is paired, and "
+                                f"its outline has {len(surface.usable_index)} vertices that can be paired (a closed "
+                                "surface flattened onto a plane has none); automatic pairs need 4 or more. Give "
+                                "the mesh before it was flattened, or landmark pairs.")
         raise GeometryError(f"The mesh has {len(surface.usable_index)} vertices that can be paired (on a triangle "
                             "with an area, not excluded); automatic pairs need more.")
     core = options_of(options, CORE)

@@ -137,8 +137,10 @@ def _readable_name(path: pathlib.Path) -> Iterator[pathlib.Path]:
 def load_mesh(path: pathlib.Path, ms: pymeshlab.MeshSet | None = None) -> pymeshlab.MeshSet:
     """``path`` loaded as a new layer of ``ms`` (a new MeshSet by default), PLY attributes included; any
     file name the file system accepts."""
-    if not path.is_file():
+    if not path.exists():
         raise SymblendError(f"{path}: no such mesh file.")
+    if not path.is_file():
+        raise SymblendError(f"{path}: not a regular file (a folder, a pipe or a device); give a mesh file.")
     ms = pymeshlab.MeshSet() if ms is None else ms
     try:
         with _readable_name(path) as readable:

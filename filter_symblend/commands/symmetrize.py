@@ -14,6 +14,9 @@ from .landmark_input import write_landmarks
 from .options import add_symmetrize_arguments
 
 
+POINTS_ONLY = (".xyz",)  # mesh formats pymeshlab writes without faces
+
+
 def register(commands) -> None:
     """Add the command to ``commands`` (argparse subparsers)."""
     parser = commands.add_parser("symmetrize", help="symmetrize a mesh from landmark pairs or automatic pairs")
@@ -34,6 +37,10 @@ def symmetrize_files(args, progress=None):
     outputs = {"output mesh": args.output, "report": args.report, "pair table": getattr(args, "save_pair_table", None)}
     check_outputs(args, outputs, [args.input, args.landmarks])
     ms = load_mesh(args.input)
+    if args.output.suffix.lower() in POINTS_ONLY and not ms.current_mesh().is_point_cloud():
+        raise SymblendError(f"{args.output}: a {args.output.suffix} file holds points only, and {args.input} has faces: "
+                            "they would be lost with the per-vertex asymmetry; write .ply (or .obj, .off for the "
+                            "faces alone).")
     landmarks = None if automatic else write_landmarks(ms, args, params)
     if landmarks and landmarks["curves"] and not params["width_spacing"]:
         params["width_spacing"] = landmarks["placed_point_spacing"]  # semilandmarks leave the widths as they were
