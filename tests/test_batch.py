@@ -166,3 +166,53 @@ def test_more_batch_errors(tmp_path, study, capsys, monkeypatch):
     summary = batch.run_row(row)  # a bad option value fails its row, with argparse's own words
     assert summary["status"] == "failed"
     assert summary["error"] == "argument --mode: invalid choice: 'stretchy' (choose from 'standard', 'affine', 'articulated')"
+
+
+def _lock(outdir: pathlib.Path, pid: int) -> pathlib.Path:
+    import json
+    import socket
+    from filter_symblend.commands.folder_lock import LOCK_NAME
+    lock = outdir / LOCK_NAME
+    lock.write_text(json.dumps({"pid": pid, "host": socket.gethostname(), "since": "2026-12-05 10:00:00"}))
+    return lock
+
+
+def test_a_folder_another_batch_is_writing_is_refused_naming_that_run(study, tmp_path, capsys):
+    """Two batches on one folder: the second stops at once, saying which run holds it, and writes nothing;
+    with --wait it waits for the other to end, then runs."""
+    import subprocess
+    import sys
+    import time
+    manifest, _ = study
+    outdir = tmp_path / "shared"
+    outdir.mkdir()
+    import threading
+    holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(3)"])
+    threading.Thread(target=holder.wait, daemon=True).start()  # reaped when it ends, as its own parent would
+    try:
+        lock = _lock(outdir, holder.pid)
+        assert main(["batch", str(manifest), "-o", str(outdir)]) == 1
+        assert capsys.readouterr().err == (
+            f"symblend: error: {outdir}: another symblend batch (process {holder.pid} on {os.uname().nodename}, "
+            f"since 2026-12-05 10:00:00) is writing this folder; wait for it (--wait), or give another folder. "
+            f"If no such run exists, delete {lock}.\n")
+        assert sorted(p.name for p in outdir.iterdir()) == [lock.name]
+        start = time.perf_counter()
+        assert main(["batch", str(manifest), "-o", str(outdir), "--wait", "--workers", "1"]) == 1  # a row fails
+        assert time.perf_counter() - start > 1.0 and holder.poll() is not None  # it waited for the holder
+    finally:
+        holder.kill()
+    assert len(_summary(outdir)) == 4 and not lock.exists()
+
+
+def test_a_lock_left_by_a_killed_batch_is_taken_over(study, tmp_path):
+    import subprocess
+    import sys
+    manifest, _ = study
+    outdir = tmp_path / "after_a_crash"
+    outdir.mkdir()
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    lock = _lock(outdir, int(gone.stdout))
+    assert main(["batch", str(manifest), "-o", str(outdir), "--workers", "1"]) == 1  # the lost.ply row fails
+    assert [row["status"] for row in _summary(outdir)] == ["ok", "ok", "failed", "ok"]
+    assert not lock.exists()

@@ -30,6 +30,7 @@ from ..atomic import write_text
 from ..errors import SymblendError
 from ..landmarks.files import Landmark, LandmarkSet, write_tps_study
 from .console import one_line, terminal_progress
+from .folder_lock import folder_lock
 from .options import add_filter_options, add_landmark_options, add_missing_option, add_symmetrize_arguments, \
     symmetrize_arguments
 from .symmetrize import symmetrize_files
@@ -57,6 +58,9 @@ def register(commands) -> None:
     batch.add_argument("--scheduler", metavar="ADDRESS",
                        help="run on the Dask cluster at ADDRESS (tcp://host:8786); needs filter-symblend[cluster]")
     batch.add_argument("--force", action="store_true", help="redo rows whose outputs are newer than their inputs")
+    batch.add_argument("--wait", action="store_true",
+                       help="if another symblend batch is writing OUTDIR, wait for it to end (default: stop, saying "
+                            "which run holds it)")
     add_landmark_options(batch, required=False, note=" (default for rows without a landmarks column)",
                          save_pair_table=False)
     add_missing_option(batch)
@@ -70,14 +74,14 @@ def run_command(args) -> int:
         raise SymblendError(f"--workers {args.workers}: give 1 or more processes.")
     defaults = []  # the options given on the command line, as words of symblend symmetrize
     for action in args.parser._actions:
-        if not action.option_strings or action.dest in (*OUTPUT_OPTIONS, "manifest", "workers", "scheduler", "force"):
+        if not action.option_strings or action.dest in (*OUTPUT_OPTIONS, "manifest", "workers", "scheduler", "force", "wait"):
             continue
         value = getattr(args, action.dest)
         if value == action.default or value is None:
             continue
         defaults += [action.option_strings[-1]] if action.nargs == 0 else [action.option_strings[-1], str(value)]
     summaries = run(args.manifest, args.output, defaults, args.workers, args.scheduler, args.force,
-                    progress=sys.stderr.isatty())
+                    progress=sys.stderr.isatty(), wait=args.wait)
     failed = [s for s in summaries if s["status"] == "failed"]
     print(f"{args.output}: {len(summaries) - len(failed)} of {len(summaries)} specimens symmetrized"
           + (f", {sum(s['status'] == 'done before' for s in summaries)} of them done before" if not args.force else "")
@@ -245,13 +249,14 @@ def _write_study_landmarks(path: pathlib.Path, summaries: list[dict]) -> None:
 
 
 def run(manifest: str | os.PathLike, outdir: str | os.PathLike, defaults: list[str] = (), workers: int | None = None,
-        scheduler: str | None = None, force: bool = False, progress: bool = False) -> list[dict]:
+        scheduler: str | None = None, force: bool = False, progress: bool = False, wait: bool = False) -> list[dict]:
     """Symmetrize every row of ``manifest`` into ``outdir`` (see the module docstring).
 
     ``defaults``: ``symblend symmetrize`` option words for every row (e.g. ``["--mode", "affine"]``);
     ``workers``: local processes (default: the cores); ``scheduler``: a Dask scheduler address
     (``tcp://host:8786``) to run on instead; ``force``: redo rows whose output and report are newer than
-    their inputs (skipped otherwise). Writes ``<mesh stem>.ply`` and ``.json`` per row, ``summary.csv``
+    their inputs (skipped otherwise); ``wait``: if another batch is writing ``outdir``, wait for it to end
+    instead of stopping (:mod:`.folder_lock`). Writes ``<mesh stem>.ply`` and ``.json`` per row, ``summary.csv``
     (one row per specimen, in manifest order) and ``landmarks.tps`` (the symmetrized landmarks of the
     study, one specimen per mesh stem). Returns the summary rows.
     """
@@ -261,6 +266,12 @@ def run(manifest: str | os.PathLike, outdir: str | os.PathLike, defaults: list[s
             raise SymblendError(f"{outdir}: give a folder for the outputs (its parent folder must exist).")
         outdir.mkdir()
     rows = read_manifest(manifest, outdir, list(defaults))
+    with folder_lock(outdir, wait):
+        return _run_rows(rows, outdir, workers, scheduler, force, progress)
+
+
+def _run_rows(rows: list[Row], outdir: pathlib.Path, workers, scheduler, force: bool, progress: bool) -> list[dict]:
+    """The rows run (those done before skipped unless ``force``), the summary and the study's landmarks written."""
     summaries = {row: _done_before(row) for row in rows if not force and row.done()}
     pending = [row for row in rows if row not in summaries]
     if pending:
