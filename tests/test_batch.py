@@ -63,6 +63,7 @@ def test_the_local_pool_gives_what_symmetrize_gives_one_by_one(study, local_run,
     assert [pathlib.Path(r["mesh"]).name for r in rows] == ["cow_a.ply", "cow_b.ply", "lost.ply", "cow_c.ply"]
     assert [r["status"] for r in rows] == ["ok", "ok", "failed", "ok"]
     assert "lost.ply: no such mesh file" in rows[2]["error"]
+    assert rows[2]["output"] == "" and all(pathlib.Path(r["output"]).exists() for r in rows if r["status"] == "ok")
     for name, mode in (("cow_a", "standard"), ("cow_b", "affine"), ("cow_c", "standard")):
         alone = tmp_path / f"{name}.ply"
         assert main(["symmetrize", str(folder / f"{name}.ply"), "-l", str(folder / f"{name}.pp"), "-o", str(alone),

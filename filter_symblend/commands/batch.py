@@ -182,7 +182,8 @@ def run_row(row: Row) -> dict:
             message = f"{error.filename}: {error.strerror}"
         else:
             message = f"unexpected {type(error).__name__}: {one_line(error)} (please report it)"
-        return {**summary, "status": "failed", "seconds": round(time.perf_counter() - start, 2), "error": message}
+        return {**summary, "output": "", "status": "failed", "seconds": round(time.perf_counter() - start, 2),
+                "error": message}  # no output: a failed row writes nothing
     return {**summary, "status": "ok", "seconds": round(time.perf_counter() - start, 2),
             **_from_report(report, ms.current_mesh().vertex_matrix())}
 
