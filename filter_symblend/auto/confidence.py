@@ -2,15 +2,15 @@
 
 A twin is listed wherever the map mirrors the vertex (its prediction lands on the surface, comes back,
 and faces the mirrored way: :mod:`.twins`); it is a vertex where the map lands within a tenth of an edge
-of one that is unambiguous and mutual (a mirrored tessellation), else a point inside a triangle. Its confidence weighs three kinds of evidence, each a
-length in units of the local vertex spacing ``s`` (a twin a whole edge off is a wrong twin, whatever
-the mesh's size or resolution):
+of one that is unambiguous and mutual (a mirrored tessellation), else a point inside a triangle. Its
+confidence weighs three kinds of evidence, each a length in units of the local vertex spacing ``s`` (a
+twin a whole edge off is a wrong twin, whatever the mesh's size or resolution):
 
 - the round trip: the twin's own twin, ``m(m(x))``, against ``x``;
 - the landing: how far off the surface the map's prediction fell;
-- the neighbours: where the affine map fitted to the nearest other pairs (leave-one-out) puts the
-  twin, against the twin (a map that tears, or folds a limb onto the wrong one, disagrees with its
-  neighbours).
+- the neighbours: where the affine map fitted to the ``local_neighbours`` nearest other pairs
+  (leave-one-out) puts the twin, against the twin (a map that tears, or folds a limb onto the wrong one,
+  disagrees with its neighbours).
 
 ``confidence = exp(-(e_trip^2 + e_land^2 + e_neighbours^2) / 2)`` with each error in units of ``s``:
 1 where the map is exactly an involution that lands on the surface and is locally affine, 0.61 for
@@ -29,8 +29,6 @@ from .growth import affine_mirror_maps
 from .maps import MirrorMap
 from .surface import Surface
 from .twins import find_twins
-
-NEIGHBOURS = 12  # pairs fitting each leave-one-out local map: as the growth's local maps (AutoConfig.local_neighbours)
 
 
 def _neighbour_misfit(positions: np.ndarray, twins: np.ndarray, config: AutoConfig) -> np.ndarray:
