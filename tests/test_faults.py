@@ -52,3 +52,23 @@ def test_an_output_format_without_faces_is_refused_before_any_work(sphere_file, 
     ms.save_current_mesh(str(cloud))  # a point cloud: .xyz holds all of it
     assert main(["symmetrize", str(cloud), "--pairs", "auto", "-o", str(tmp_path / "cloud_out.xyz")]) == 0
     assert np.isfinite(np.loadtxt(tmp_path / "cloud_out.xyz")).all()
+
+
+def test_an_obj_cut_short_is_refused_as_cut_short(sphere_file, tmp_path, capsys):
+    """An OBJ declares no counts: one copied half-way is read as its first vertices and no faces, then
+    refused for an unrelated reason. It is refused as what it is, before any work."""
+    whole = sphere_file.read_bytes()
+    half = tmp_path / "half.obj"
+    line_end = whole.index(b"\n", whole.index(b"\nv ", len(whole) // 4) + 1)
+    half.write_bytes(whole[:line_end - 2])  # ends inside a vertex line's third coordinate
+    last = half.read_bytes().rsplit(b"\n", 1)[-1].decode()
+    assert main(["symmetrize", str(half), "--pairs", "auto", "-o", str(tmp_path / "out.ply")]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith(f"symblend: error: {half}: the file ends in the middle of a line ('{last.strip()}') and no "
+                          "face could be read: it looks cut short (a copy or a download that stopped); pymeshlab read ")
+    assert err.endswith("Copy the whole file again (a whole point cloud: end it with a newline).\n")
+    assert not (tmp_path / "out.ply").exists()
+    whole_without_final_newline = tmp_path / "whole.obj"
+    whole_without_final_newline.write_bytes(whole.rstrip(b"\n"))  # a whole last line without its newline is fine
+    assert main(["landmarks", "check", str(whole_without_final_newline), "-l", str(tmp_path / "none.pp")]) == 1
+    assert "none.pp" in capsys.readouterr().err  # got past the mesh to the missing landmark file

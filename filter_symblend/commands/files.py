@@ -76,9 +76,27 @@ def _header_counts(path: pathlib.Path) -> tuple[int | None, int | None]:
     return None, None
 
 
+OBJ_DATA = (b"v", b"vn", b"vt", b"f")  # OBJ statements that carry the mesh
+
+
+def _cut_short(path: pathlib.Path, faces_read: int) -> str | None:
+    """The last line of an OBJ file (which declares no counts) when the file looks cut in the middle of it: no
+    final newline after a data line, and no face read (a copy stopped inside the vertices); or None."""
+    if path.suffix.lower() != ".obj" or faces_read:
+        return None
+    with open(path, "rb") as handle:
+        handle.seek(max(0, path.stat().st_size - 256))
+        tail = handle.read()
+    if not tail or tail.endswith(b"\n"):
+        return None
+    last = tail.rsplit(b"\n", 1)[-1]
+    words = last.split()
+    return last.decode("ascii", "replace").strip() if words and words[0] in OBJ_DATA else None
+
+
 def check_loaded_mesh(path: pathlib.Path, points: np.ndarray, faces: np.ndarray) -> None:
     """Raise SymblendError when the mesh loaded from ``path`` is not the whole file: non-finite coordinates,
-    fewer vertices than the file declares (pymeshlab drops a vertex `nan nan nan` and renumbers the rest,
+    an OBJ that ends in the middle of a line, fewer vertices than the file declares (pymeshlab drops a vertex `nan nan nan` and renumbers the rest,
     so landmarks by index would land on the wrong vertices), or fewer faces than it declares."""
     bad = np.flatnonzero(~np.isfinite(points).all(axis=1))
     if bad.size:
@@ -86,8 +104,13 @@ def check_loaded_mesh(path: pathlib.Path, points: np.ndarray, faces: np.ndarray)
                             "repair the mesh (e.g. remove those vertices in MeshLab) first.")
     try:
         declared_vertices, declared_faces = _header_counts(path)
+        cut = _cut_short(path, len(faces))
     except (OSError, ValueError, IndexError):
         return  # a header we cannot read: pymeshlab read the file, trust it
+    if cut is not None:
+        raise SymblendError(f"{path}: the file ends in the middle of a line ('{cut}') and no face could be read: it "
+                            f"looks cut short (a copy or a download that stopped); pymeshlab read {len(points)} "
+                            "vertices of it. Copy the whole file again (a whole point cloud: end it with a newline).")
     if declared_vertices is not None and declared_vertices != len(points):
         raise SymblendError(f"{path}: the file declares {declared_vertices} vertices and {len(points)} could be "
                             "read (a vertex with non-finite coordinates, or a damaged file); the vertices would be "
