@@ -72,3 +72,30 @@ def test_an_obj_cut_short_is_refused_as_cut_short(sphere_file, tmp_path, capsys)
     whole_without_final_newline.write_bytes(whole.rstrip(b"\n"))  # a whole last line without its newline is fine
     assert main(["landmarks", "check", str(whole_without_final_newline), "-l", str(tmp_path / "none.pp")]) == 1
     assert "none.pp" in capsys.readouterr().err  # got past the mesh to the missing landmark file
+
+
+def test_symblend_report_writes_all_its_files_or_none(sphere_file, tmp_path, capsys, monkeypatch):
+    """symblend report's distance mesh and JSON are one result: a full disk on the JSON (written last) leaves
+    neither, nor any partial file; written whole otherwise."""
+    import errno
+    import pathlib
+    after = tmp_path / "after.ply"
+    assert main(["symmetrize", str(sphere_file), "--pairs", "auto", "-o", str(after)]) == 0
+    capsys.readouterr()
+    distance, numbers = tmp_path / "distance.ply", tmp_path / "numbers.json"
+    original = pathlib.Path.write_text
+
+    def disk_full_for_json(self, *args, **kwargs):
+        if self.suffix == ".json":
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return original(self, *args, **kwargs)
+
+    before = sorted(p.name for p in tmp_path.iterdir())
+    with monkeypatch.context() as patched:
+        patched.setattr(pathlib.Path, "write_text", disk_full_for_json)
+        assert main(["report", str(sphere_file), str(after), "--distance-ply", str(distance),
+                     "--json", str(numbers)]) == 1
+    assert capsys.readouterr().err.endswith(f"symblend: error: {numbers}: No space left on device\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+    assert main(["report", str(sphere_file), str(after), "--distance-ply", str(distance), "--json", str(numbers)]) == 0
+    assert distance.exists() and numbers.exists()

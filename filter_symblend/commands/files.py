@@ -12,7 +12,7 @@ from collections.abc import Iterator
 import numpy as np
 import pymeshlab
 
-from ..atomic import all_or_none, replaced_when_done, write_text
+from ..atomic import all_or_none
 from ..errors import SymblendError
 from ..meshlab.attributes import custom_attribute_names
 from ..meshlab.ply_attributes import load_mesh_with_attributes
@@ -198,12 +198,6 @@ def save_mesh(ms: pymeshlab.MeshSet, path: pathlib.Path, output: pathlib.Path | 
         raise SymblendError(f"{output}: pymeshlab cannot write it ({one_line(error)}; is the disk full?).") from None
 
 
-def save_atomically(ms: pymeshlab.MeshSet, output: pathlib.Path) -> None:
-    """Save the current mesh (see :func:`save_mesh`) to a temporary name beside ``output``, then rename it."""
-    with replaced_when_done(output) as temporary:
-        save_mesh(ms, temporary, output)
-
-
 def save_with_report(ms: pymeshlab.MeshSet, output: pathlib.Path, report_path: pathlib.Path | None,
                      report: dict) -> None:
     """The output mesh and its JSON report (if ``report_path``), both written or neither."""
@@ -214,24 +208,20 @@ def save_with_report(ms: pymeshlab.MeshSet, output: pathlib.Path, report_path: p
             report_temporary.write_text(text, encoding="utf-8")
 
 
-def save_quality_ply(ms: pymeshlab.MeshSet, path: pathlib.Path, quality: np.ndarray) -> None:
-    """Save the current mesh of ``ms`` to ``path`` with ``quality`` (N,) as its per-vertex quality."""
+def save_quality_ply(ms: pymeshlab.MeshSet, path: pathlib.Path, quality: np.ndarray,
+                     output: pathlib.Path | None = None) -> None:
+    """Save the current mesh of ``ms`` to ``path`` (a temporary name for ``output``) with ``quality`` (N,) as
+    its per-vertex quality."""
     mesh = ms.current_mesh()
     copy = pymeshlab.Mesh(mesh.vertex_matrix(), mesh.face_matrix(), v_scalar_array=np.asarray(quality, dtype=float))
     scratch = pymeshlab.MeshSet()
     scratch.add_mesh(copy)
-    save_atomically(scratch, path)
+    save_mesh(scratch, path, output)
 
 
 def report_json(report: dict) -> str:
     """``report`` as the text of a JSON file."""
     return json.dumps(report, indent=2, default=_jsonable) + "\n"
-
-
-def write_report(path: pathlib.Path | None, report: dict) -> None:
-    """Write ``report`` as JSON to ``path`` (if given) under a temporary name, then rename it."""
-    if path:
-        write_text(path, report_json(report))
 
 
 def _jsonable(value):

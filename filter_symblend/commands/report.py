@@ -10,7 +10,8 @@ from ..checks.surface_asymmetry import CHECK_SAMPLES
 from ..checks.verdict import result_warnings
 from ..core.mirror_fill import distances_to_surface
 from ..meshlab.layer_checks import compare_layers
-from .files import check_outputs, load_mesh, save_quality_ply, write_report
+from ..atomic import all_or_none
+from .files import check_outputs, load_mesh, report_json, save_quality_ply
 
 
 def register(commands) -> None:
@@ -31,7 +32,8 @@ def register(commands) -> None:
 
 
 def run(args) -> int:
-    """The command: the table on stdout, then the JSON, the distance mesh and the picture that were asked for."""
+    """The command: the table on stdout, then the JSON, the distance mesh and the picture that were asked for,
+    all of them or none."""
     outputs = {"picture": args.png, "JSON report": args.json, "distance mesh": args.distance_ply}
     check_outputs(args, outputs, [args.before, args.after])
     ms = load_mesh(args.before)
@@ -61,16 +63,20 @@ def run(args) -> int:
             "before_to_after": distances_to_surface(after_mesh.vertex_matrix(), after_mesh.face_matrix(),
                                                     before_mesh.vertex_matrix()),
             "after_to_before": after_to_before}
+    with all_or_none([args.distance_ply, args.png, args.json]) as (distance_file, picture_file, json_file):
+        if args.distance_ply:
+            ms.set_current_mesh(after_id)
+            save_quality_ply(ms, distance_file, after_to_before, args.distance_ply)
+        if args.png:
+            from ..checks.render import render_comparison  # matplotlib, only for --png
+
+            meshes = [dict(result[key], points=ms.mesh(mesh_id).vertex_matrix(), faces=ms.mesh(mesh_id).face_matrix())
+                      for key, mesh_id in (("mirror_asymmetry_before", before_id), ("mirror_asymmetry_after", after_id))]
+            result["png_views"] = render_comparison(picture_file, *meshes, titles=(args.before.name, args.after.name))
+        if args.json:
+            json_file.write_text(report_json(result), encoding="utf-8")
     if args.distance_ply:
-        ms.set_current_mesh(after_id)
-        save_quality_ply(ms, args.distance_ply, after_to_before)
         print(f"distance mesh: {args.distance_ply} (quality: each vertex's distance to the mesh before)")
     if args.png:
-        from ..checks.render import render_comparison  # matplotlib, only for --png
-
-        meshes = [dict(result[key], points=ms.mesh(mesh_id).vertex_matrix(), faces=ms.mesh(mesh_id).face_matrix())
-                  for key, mesh_id in (("mirror_asymmetry_before", before_id), ("mirror_asymmetry_after", after_id))]
-        result["png_views"] = render_comparison(args.png, *meshes, titles=(args.before.name, args.after.name))
         print(f"picture: {args.png}")
-    write_report(args.json, result)
     return 0
