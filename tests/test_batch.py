@@ -217,3 +217,19 @@ def test_a_lock_left_by_a_killed_batch_is_taken_over(study, tmp_path):
     assert main(["batch", str(manifest), "-o", str(outdir), "--workers", "1"]) == 1  # the lost.ply row fails
     assert [row["status"] for row in _summary(outdir)] == ["ok", "ok", "failed", "ok"]
     assert not lock.exists()
+
+
+def test_the_summary_gives_the_confident_share_of_automatic_pairs(study, tmp_path):
+    """A row with automatic pairs says how much of its surface has a confident twin (its report's figure); a row
+    with landmarks alone leaves the column empty."""
+    import json
+    manifest, folder = study
+    mixed = folder / "mixed.csv"
+    mixed.write_text("mesh,landmarks,pairs\ncow_a.ply,,auto\ncow_b.ply,cow_b.pp,landmarks\n")
+    outdir = tmp_path / "mixed"
+    assert main(["batch", str(mixed), "-o", str(outdir), "--workers", "1"]) == 0
+    auto, landmarks = _summary(outdir)
+    report = json.loads((outdir / "cow_a.json").read_text())
+    assert float(auto["confident_share"]) == pytest.approx(report["auto_pairs"]["mirror_map"]["confident_share"],
+                                                           rel=1e-3)
+    assert 0.9 < float(auto["confident_share"]) <= 1.0 and landmarks["confident_share"] == ""

@@ -23,13 +23,13 @@ import sys
 import time
 import warnings
 
-import pymeshlab
 from threadpoolctl import threadpool_limits
 
 from ..atomic import write_text
 from ..errors import SymblendError
 from ..landmarks.files import Landmark, LandmarkSet, write_tps_study
 from .console import one_line, terminal_progress
+from .files import load_mesh
 from .folder_lock import folder_lock
 from .options import add_filter_options, add_landmark_options, add_missing_option, add_symmetrize_arguments, \
     symmetrize_arguments
@@ -37,7 +37,7 @@ from .symmetrize import symmetrize_files
 
 ASYMMETRY_FIELDS = ("landmark_asymmetry_before", "landmark_asymmetry_after", "mirror_asymmetry_before",
                     "mirror_asymmetry_after")  # report entries whose RMS (relative) the summary shows
-SUMMARY_FIELDS = ("mesh", "status", "seconds", *ASYMMETRY_FIELDS, "output", "error")
+SUMMARY_FIELDS = ("mesh", "status", "seconds", *ASYMMETRY_FIELDS, "confident_share", "output", "error")
 PATH_COLUMNS = ("mesh", "landmarks", "pair_table")
 OUTPUT_OPTIONS = ("output", "report", "overwrite", "help", "save_pair_table")  # set by the batch, not by a row
 SCHEDULER_TIMEOUT = 30  # seconds to wait for a Dask scheduler to answer
@@ -190,8 +190,11 @@ def run_row(row: Row) -> dict:
 
 def _from_report(report: dict, points) -> dict:
     """What a specimen's summary takes from its report and output points (N, 3): the asymmetry columns
-    (RMS, relative to the diagonal) and its landmarks after symmetrizing ([[name, x, y, z], ...])."""
+    (RMS, relative to the diagonal), with automatic pairs the confident share of their map, and its
+    landmarks after symmetrizing ([[name, x, y, z], ...])."""
     figures = {key: f"{report[key]['rms_relative']:.6g}" for key in ASYMMETRY_FIELDS if key in report}
+    if "auto_pairs" in report:  # the share of the surface whose automatic twin is confident
+        figures["confident_share"] = f"{report['auto_pairs']['mirror_map']['confident_share']:.3g}"
     placed = (report.get("landmarks") or {}).get("vertices", [])
     return {**figures, "landmarks": [[name, *map(float, points[vertex])] for name, vertex in placed]}
 
@@ -199,8 +202,7 @@ def _from_report(report: dict, points) -> dict:
 def _done_before(row: Row) -> dict:
     """The summary of a row done by an earlier run, from its report."""
     report = json.loads(row.report.read_text())
-    ms = pymeshlab.MeshSet()
-    ms.load_new_mesh(str(row.output))
+    ms = load_mesh(row.output)  # any file name (pymeshlab takes UTF-8 text only)
     return {"mesh": str(row.mesh), "output": str(row.output), "status": "done before", "seconds": 0.0,
             **_from_report(report, ms.current_mesh().vertex_matrix())}
 
