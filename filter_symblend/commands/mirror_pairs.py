@@ -39,6 +39,8 @@ def register(commands) -> None:
                          save_pair_table=False)
     add_filter_options(parser)
     parser.set_defaults(handler=run, pairs=None)
+    pairs = next(action for action in parser._actions if action.dest == "pairs")
+    pairs.help = "where the pairs come from: auto, or landmarks+auto with -l; default: auto (landmarks+auto with -l)"
 
 
 def run(args) -> int:
