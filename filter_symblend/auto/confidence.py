@@ -55,7 +55,7 @@ def evidence(mirror: MirrorMap, sources: np.ndarray, config: AutoConfig, toleran
         return twins, listed, errors
     spacing = np.maximum(surface.local_spacing[sources[rows]], 1e-12 * surface.diagonal)
     positions, point = surface.points[sources[rows]], twins.point[rows]
-    back = surface.nearest_points(mirror.predict(point))[0]
+    back = surface.nearest_points(twins.returned[rows])[0]
     errors[rows, 0] = np.linalg.norm(back - positions, axis=1) / spacing
     errors[rows, 1] = twins.landing[rows] / spacing
     errors[rows, 2] = _neighbour_misfit(positions, point, config) / spacing

@@ -26,8 +26,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..core.mesh_quantities import farthest_point_order
-from ..core.mirror_pairs import APART
+from ..core.mirror_pairs import spread_left_sides
 from ..core.symmetrize import SymmetrizationResult
 from ..errors import SymblendError
 from .config import AutoConfig
@@ -47,19 +46,6 @@ def descriptor_disagreement(signatures: np.ndarray, vertex_map: np.ndarray) -> f
     logs = np.log(signatures)
     shuffled = np.random.default_rng(0).permutation(len(logs))
     return float(np.median(np.abs(logs - logs[vertex_map])) / np.median(np.abs(logs - logs[shuffled])))
-
-
-def _left_pairs(points: np.ndarray, vertex_map: np.ndarray, diagonal: float) -> np.ndarray:
-    """Up to PAIRS vertices (k,) of ``points`` (n, 3) spread evenly, each the left side of a mutual pair of
-    ``vertex_map`` (n,) whose sides lie APART of the ``diagonal`` apart."""
-    gaps = points - points[vertex_map]
-    apart = np.flatnonzero((vertex_map[vertex_map] == np.arange(len(points)))
-                           & (np.linalg.norm(gaps, axis=1) > APART * diagonal))
-    if len(apart) < 4:
-        return apart
-    direction = np.linalg.eigh(gaps[apart].T @ gaps[apart])[1][:, -1]
-    left = apart[gaps[apart] @ direction > 0]
-    return left[farthest_point_order(points[left], min(PAIRS, len(left)))]
 
 
 def intrinsic_start(surface: Surface, config: AutoConfig, solve_pairs: Callable[[np.ndarray, np.ndarray], SymmetrizationResult],
@@ -87,7 +73,8 @@ def intrinsic_start(surface: Surface, config: AutoConfig, solve_pairs: Callable[
         entry = tried["starts"][start] = {"descriptor_disagreement": descriptor_disagreement(signatures, vertex_map)}
         if entry["descriptor_disagreement"] > DESCRIPTOR_AGREEMENT:
             continue
-        left = _left_pairs(mesh.points, vertex_map, surface.diagonal)
+        mutual = vertex_map[vertex_map] == np.arange(len(vertex_map))
+        left = spread_left_sides(mesh.points, mesh.points[vertex_map], mutual, PAIRS, surface.diagonal)
         left, right = vertex_of[left], vertex_of[vertex_map[left]]
         distinct = left != right
         entry["pairs"] = int(np.count_nonzero(distinct))

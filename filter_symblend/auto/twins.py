@@ -26,7 +26,7 @@ class Twins:
     barycentric weights of the twin point (the same point on any embedding of the mesh);
     ``vertex`` (m,) the nearest vertex to the prediction, ``vertex_distance``, ``ratio`` (nearest /
     second-nearest), ``spacing`` the local vertex spacing there, ``mutual`` whether the map sends that vertex
-    back to the source; ``sound`` whether
+    back to the source; ``returned`` (m, 3) where the map sends the twin point (the round trip); ``sound`` whether
     the map is consistent there; ``side`` +1 for a source on the left (along the map's normal), -1 right."""
 
     sources: np.ndarray
@@ -39,6 +39,7 @@ class Twins:
     ratio: np.ndarray
     spacing: np.ndarray
     mutual: np.ndarray
+    returned: np.ndarray
     sound: np.ndarray
     side: np.ndarray
 
@@ -64,7 +65,8 @@ def find_twins(mirror: MirrorMap, sources: np.ndarray, tolerance: float) -> Twin
     positions = surface.points[sources]
     predicted = mirror.predict(positions)
     point, landing, twin_normal, corners, weights = surface.nearest_points(predicted)
-    back, _, _ = surface.nearest_vertices(mirror.predict(point))  # (a vertex: the round trip's own error is small)
+    returned = mirror.predict(point)
+    back, _, _ = surface.nearest_vertices(returned)  # (a vertex: the round trip's own error is small)
     round_trip = np.linalg.norm(surface.points[back] - positions, axis=1)
     sound = np.isfinite(predicted).all(axis=1) & (round_trip <= np.maximum(surface.local_spacing[sources], tolerance))
     if surface.is_mesh:
@@ -73,4 +75,4 @@ def find_twins(mirror: MirrorMap, sources: np.ndarray, tolerance: float) -> Twin
     returning, _, _ = surface.nearest_vertices(mirror.predict(surface.points[vertex]))
     side = np.where((positions - point) @ mirror.normal >= 0, 1, -1).astype(np.int8)
     return Twins(sources, point, landing, corners, weights, vertex, vertex_distance, ratio, surface.local_spacing[vertex],
-                 returning == sources, sound, side)
+                 returning == sources, returned, sound, side)

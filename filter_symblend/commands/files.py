@@ -96,8 +96,9 @@ def _cut_short(path: pathlib.Path, faces_read: int) -> str | None:
 
 def check_loaded_mesh(path: pathlib.Path, points: np.ndarray, faces: np.ndarray) -> None:
     """Raise SymblendError when the mesh loaded from ``path`` is not the whole file: non-finite coordinates,
-    an OBJ that ends in the middle of a line, fewer vertices than the file declares (pymeshlab drops a vertex `nan nan nan` and renumbers the rest,
-    so landmarks by index would land on the wrong vertices), or fewer faces than it declares."""
+    an OBJ that ends in the middle of a line, fewer vertices than the file declares (pymeshlab drops a vertex
+    `nan nan nan` and renumbers the rest, so landmarks by index would land on the wrong vertices), or fewer
+    faces than it declares."""
     bad = np.flatnonzero(~np.isfinite(points).all(axis=1))
     if bad.size:
         raise SymblendError(f"{path}: vertex {bad[0]} has non-finite coordinates ({bad.size} such vertices); "
@@ -142,6 +143,11 @@ def _utf8(path: pathlib.Path) -> bool:
         return False
 
 
+def _ascii_sibling(path: pathlib.Path, purpose: str) -> pathlib.Path:
+    """A hidden ASCII name beside ``path``, with its suffix (pymeshlab goes by it), for this process."""
+    return path.with_name(f".symblend-{purpose}-{os.getpid()}{path.suffix.encode('ascii', 'ignore').decode()}")
+
+
 @contextlib.contextmanager
 def _readable_name(path: pathlib.Path) -> Iterator[pathlib.Path]:
     """``path``, or when pymeshlab cannot take its name, a link to it with an ASCII name in the same folder
@@ -149,7 +155,7 @@ def _readable_name(path: pathlib.Path) -> Iterator[pathlib.Path]:
     if _utf8(path):
         yield path
         return
-    alias = path.with_name(f".symblend-reading-{os.getpid()}{path.suffix.encode('ascii', 'ignore').decode()}")
+    alias = _ascii_sibling(path, "reading")
     os.symlink(path.resolve(), alias)
     try:
         yield alias
@@ -188,7 +194,7 @@ def save_mesh(ms: pymeshlab.MeshSet, path: pathlib.Path, output: pathlib.Path | 
         if _utf8(path):
             ms.save_current_mesh(str(path), **options)
         else:  # pymeshlab writes an ASCII name beside it, renamed to ``path``
-            ascii_name = path.with_name(f".symblend-writing-{os.getpid()}{path.suffix.encode('ascii', 'ignore').decode()}")
+            ascii_name = _ascii_sibling(path, "writing")
             try:
                 ms.save_current_mesh(str(ascii_name), **options)
                 os.replace(ascii_name, path)

@@ -6,11 +6,11 @@ from __future__ import annotations
 import pathlib
 import sys
 
+from ..atomic import all_or_none
 from ..checks.surface_asymmetry import CHECK_SAMPLES
 from ..checks.verdict import result_warnings
 from ..core.mirror_fill import distances_to_surface
 from ..meshlab.layer_checks import compare_layers
-from ..atomic import all_or_none
 from .files import check_outputs, load_mesh, report_json, save_quality_ply
 
 

@@ -54,22 +54,27 @@ class MirrorPairs:
         return self.confidence >= threshold
 
 
+def spread_left_sides(sources: np.ndarray, twins: np.ndarray, eligible: np.ndarray, count: int,
+                      diagonal: float) -> np.ndarray:
+    """Rows (c,) of up to ``count`` of the ``eligible`` (k,) bool pairs ``sources`` (k, 3) -> ``twins`` (k, 3)
+    spread evenly (farthest-point order), each pair once, from its source on the left side of the shape.
+
+    Pairs whose two points lie closer than ``APART`` x ``diagonal`` are left out. The side is the sign of the
+    pair's gap along the principal direction of all the gaps (the mirror direction, bent shapes included, as
+    long as no part is turned over)."""
+    gaps = sources - twins
+    rows = np.flatnonzero(eligible & (np.linalg.norm(gaps, axis=1) > APART * diagonal))
+    if not len(rows):
+        return rows
+    direction = np.linalg.eigh(gaps[rows].T @ gaps[rows])[1][:, -1]
+    left = rows[gaps[rows] @ direction >= 0]
+    return left[farthest_point_order(sources[left], min(count, len(left)))]
+
+
 def pairs_to_check(pairs: MirrorPairs, points: np.ndarray, count: int,
                    threshold: float = CONFIDENT) -> np.ndarray:
-    """Rows into ``pairs`` (c,): up to ``count`` of the confident pairs spread evenly over the surface
-    (farthest-point order), each once, from its vertex on the left side of the shape.
-
-    Pairs whose two points lie closer than ``APART`` of the bounding-box diagonal of ``points`` (N, 3) are
-    left out.
-    The side is the sign of the pair's gap along the principal direction of all the gaps (the mirror
-    direction, bent shapes included, as long as no part is turned over)."""
+    """Rows into ``pairs`` (c,): up to ``count`` of the confident pairs, spread over the surface of ``points``
+    (N, 3) by :func:`spread_left_sides`."""
     points = np.asarray(points, dtype=float)
-    diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
-    gaps = points[pairs.vertex] - pairs.twin
-    apart = np.linalg.norm(gaps, axis=1) > APART * diagonal
-    eligible = np.flatnonzero(pairs.confident(threshold) & apart)
-    if not len(eligible):
-        return eligible
-    direction = np.linalg.eigh(gaps[eligible].T @ gaps[eligible])[1][:, -1]
-    left = eligible[gaps[eligible] @ direction >= 0]  # each pair once: from its left vertex
-    return left[farthest_point_order(points[pairs.vertex[left]], min(count, len(left)))]
+    return spread_left_sides(points[pairs.vertex], pairs.twin, pairs.confident(threshold), count,
+                             float(np.linalg.norm(np.ptp(points, axis=0))))

@@ -52,7 +52,7 @@ def read_ply_vertex_properties(path) -> dict[str, np.ndarray]:
         with path.open("rb") as handle:
             handle.seek(body_start)
             rows = np.loadtxt(handle, max_rows=count, ndmin=2)
-        return _columns(path, properties, rows[0], lambda column: rows[:, column])
+        return _columns(path, properties, rows)
     order = {"binary_little_endian": "<", "binary_big_endian": ">"}.get(encoding)
     if order is None:
         raise SymblendError(f"{path}: unknown PLY format {encoding!r}.")
@@ -72,25 +72,27 @@ def read_ply_vertex_properties(path) -> dict[str, np.ndarray]:
     data = np.fromfile(path, dtype=np.dtype(fields), count=count, offset=body_start)
     for number, p in enumerate(properties):
         if p[0] == "list" and np.any(data[f"_count{number}"] != data[f"_count{number}"][0]):
-            raise SymblendError(f"{path}: the vertex property {p[3]!r} is a list of varying length; only lists "
-                                "of one length (such as a point attribute's 3 coordinates) are read.")
+            raise _varying_length(path, p[3])
     return {p[-1]: data[p[-1]].astype(float) for p in properties}
 
 
-def _columns(path, properties, first_row, column_of) -> dict[str, np.ndarray]:
-    """The properties of an ASCII PLY's vertex rows: scalars (N,), lists of one length (N, k)."""
+def _varying_length(path, name: str) -> SymblendError:
+    return SymblendError(f"{path}: the vertex property {name!r} is a list of varying length; only lists of one "
+                         "length (such as a point attribute's 3 coordinates) are read.")
+
+
+def _columns(path, properties, rows: np.ndarray) -> dict[str, np.ndarray]:
+    """The properties of an ASCII PLY's vertex ``rows`` (N, columns): scalars (N,), lists of one length (N, k)."""
     out, column = {}, 0
     for p in properties:
         if p[0] == "list":
-            length = int(first_row[column])
-            counts = column_of(column)
-            if np.any(counts != length):
-                raise SymblendError(f"{path}: the vertex property {p[3]!r} is a list of varying length; only "
-                                    "lists of one length (such as a point attribute's 3 coordinates) are read.")
-            out[p[3]] = np.column_stack([column_of(column + 1 + k) for k in range(length)]).astype(float)
+            length = int(rows[0, column])
+            if np.any(rows[:, column] != length):
+                raise _varying_length(path, p[3])
+            out[p[3]] = rows[:, column + 1:column + 1 + length].astype(float)
             column += 1 + length
         else:
-            out[p[1]] = column_of(column).astype(float)
+            out[p[1]] = rows[:, column].astype(float)
             column += 1
     return out
 
