@@ -110,7 +110,7 @@ def test_a_dask_cluster_runs_the_same_rows(study, local_run, tmp_path):
     ("mesh,output\na.ply,b.ply\n", r"column 'output' is not an option"),
     ("mesh,midline\na.ply,maybe\n", r"line 2: 'maybe' for the flag `midline`; write true or false"),
     ("mesh\na.ply\nsub/a.ply\n", r"line 3: a.ply has the same name as the mesh of line 2"),
-    ("mesh\n\n,\n", r"line 2: the mesh cell is empty"),
+    ("mesh,landmarks\n\n,a.pp\n", r"line 3: the mesh cell is empty"),
 ])
 def test_manifest_errors(tmp_path, text, message):
     (tmp_path / "m.csv").write_text(text)

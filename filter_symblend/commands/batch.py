@@ -28,6 +28,7 @@ from threadpoolctl import threadpool_limits
 from ..atomic import write_text
 from ..errors import SymblendError
 from ..landmarks.files import Landmark, LandmarkSet, write_tps_study
+from ..landmarks.text_files import csv_records, read_text
 from .console import one_line, terminal_progress
 from .files import load_mesh
 from .folder_lock import folder_lock
@@ -128,24 +129,21 @@ def read_manifest(manifest: str | os.PathLike, outdir: str | os.PathLike, defaul
     """The rows of ``manifest`` (see the module docstring), writing to ``outdir``; ``defaults``: words of
     ``symblend symmetrize`` options for every row, which a row's own columns override."""
     manifest, outdir = pathlib.Path(manifest), pathlib.Path(outdir)
-    try:
-        with open(manifest, newline="", encoding="utf-8-sig") as handle:
-            reader = csv.DictReader(handle)
-            columns, records = [c.strip() for c in reader.fieldnames or []], list(reader)
-    except OSError as error:
-        raise SymblendError(f"{manifest}: cannot be read ({error.strerror}).") from None
+    table = csv_records(read_text(manifest, "a manifest is a CSV table with a header row"))
+    columns = [c.strip() for c in table[0][1]] if table else []
     if "mesh" not in columns:
         raise SymblendError(f"{manifest}: needs a header row with a `mesh` column (and optionally landmarks and "
                             f"any option of symblend symmetrize); got {', '.join(columns) or 'no rows'}.")
     options = {dest: action for dest, action in _option_table().items() if dest not in OUTPUT_OPTIONS}
-    bad = [c for c in columns if c != "mesh" and c.replace("-", "_") not in options]
+    bad = [c for c in columns if c and c != "mesh" and c.replace("-", "_") not in options]
     if bad:
         raise SymblendError(f"{manifest}: column {bad[0]!r} is not an option of symblend symmetrize (the outputs go "
                             f"to OUTDIR); valid columns: mesh, {', '.join(sorted(options))}.")
     rows, stems = [], {}
-    for number, record in enumerate(records, start=2):
+    for number, record in table[1:]:
         where = f"{manifest}, line {number}"
-        cells = {key.strip().replace("-", "_"): (value or "") for key, value in record.items() if key is not None}
+        cells = {column.replace("-", "_"): value for column, value in zip(columns, record) if column}
+        cells.setdefault("mesh", "")
         if not cells["mesh"].strip():
             raise SymblendError(f"{where}: the mesh cell is empty.")
         for column in PATH_COLUMNS:

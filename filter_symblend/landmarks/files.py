@@ -13,6 +13,10 @@
 | .nts        | NTSYS matrix, one specimen   | its missing-value code, or NA    | mesh       |
 |             | per row (geomorph, Morpho)   |                                  |            |
 
+Every file is read from its bytes by one rule (``text_files``): a byte-order mark, UTF-8 or
+Windows-1252; lines end at LF or CRLF, or at CR in a file without LF; the CSV formats follow the csv
+module's quoting rules.
+
 In every format a coordinate written NA, NaN, -999 or 9999 (as morphometric
 software writes a missing landmark) marks the landmark as not placed. A .tps or .nts
 file may hold several specimens: one is chosen by ID or 1-based index
@@ -35,6 +39,7 @@ from .morphometrics_files import read_nts, read_tps, write_nts, write_tps, write
 from .pickpoints_file import read_pp, write_pp
 from .point_tables import read_csv, read_pts, write_csv, write_pts
 from .slicer_files import read_fcsv, read_mrk_json, write_fcsv, write_mrk_json
+from .text_files import read_text
 
 __all__ = ["FORMATS", "Landmark", "LandmarkFileError", "LandmarkSet", "read_landmarks", "write_landmarks",
            "write_tps_study"]
@@ -68,13 +73,7 @@ def read_landmarks(path, specimen: str | int | None = None) -> LandmarkSet:
     Slicer markups JSON is recognised by its content whatever its name. ``specimen`` (an ID or name, or
     a 1-based index) chooses one specimen of a .tps or .nts file, or one markup of a markups JSON."""
     path = pathlib.Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except OSError as error:
-        raise LandmarkFileError(f"{path}: cannot be read ({error.strerror}).") from None
-    except UnicodeDecodeError:
-        raise LandmarkFileError(f"{path}: not a text file; landmark files are text "
-                                f"({', '.join(sorted(FORMATS))}).") from None
+    text = read_text(path, f"landmark files are text ({', '.join(sorted(FORMATS))})")
     suffix = ".json" if text.lstrip().startswith("{") else _format_of(path)
     if specimen is not None and suffix not in SEVERAL_SETS:
         raise LandmarkFileError(f"{path}: --specimen chooses a specimen of a .tps or .nts file, or a markup of a "

@@ -7,6 +7,7 @@ import dataclasses
 
 from ..atomic import write_text
 from .landmark_set import Landmark, LandmarkFileError, LandmarkSet, chosen_index, parse_number, position_of
+from .text_files import lines as text_lines
 
 
 @dataclasses.dataclass
@@ -19,7 +20,7 @@ class _Specimen:
 
 def _tps_specimens(text: str, path: str) -> list[_Specimen]:
     """The specimens of a TPS file, in order; 2D files (LM=) are refused."""
-    specimens, lines, number = [], text.splitlines(), 0
+    specimens, lines, number = [], text_lines(text), 0
     while number < len(lines):
         line = lines[number].strip()
         number += 1
@@ -94,7 +95,7 @@ def _nts_specimens(text: str, path: str) -> list[_Specimen]:
     ``1 n[L] p*k[L] 0|1 [missing code] DIM=3``, then the labels (if L), then n rows of p*k values; text
     after a double quote is a comment."""
     tokens = []
-    for number, line in enumerate(text.splitlines(), start=1):
+    for number, line in enumerate(text_lines(text), start=1):
         tokens += [(token, number) for token in line.split('"')[0].split()]
     if len(tokens) < 4 or tokens[0][0] != "1":
         raise LandmarkFileError(f"{path}: the parameter line must start with 1 (a rectangular matrix): "

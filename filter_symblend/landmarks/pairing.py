@@ -23,6 +23,7 @@ from ..atomic import write_text
 from ..core.landmark_pairs import LandmarkPairs
 from ..errors import LandmarkError, SymblendWarning
 from .files import LandmarkFileError, LandmarkSet
+from .text_files import csv_records, read_text
 
 LEFT_WORDS = ("l", "left", "lt")
 RIGHT_WORDS = ("r", "right", "rt")
@@ -64,13 +65,10 @@ def pair_by_name(names: list[str], left_words=LEFT_WORDS, right_words=RIGHT_WORD
 def read_pair_table(path, names: list[str]):
     """Index pairs [(left, right)] from a two-column CSV of landmark names or 1-based numbers."""
     path = pathlib.Path(path)
-    try:
-        rows = [r for r in csv.reader(path.read_text(encoding="utf-8-sig").splitlines()) if r]
-    except OSError as error:
-        raise LandmarkFileError(f"{path}: cannot be read ({error.strerror}).") from None
+    rows = csv_records(read_text(path, "a pair table is a CSV of two columns, left and right"))
     lookup = {name: i for i, name in enumerate(names)}
     pairs = []
-    for number, row in enumerate(rows, start=1):
+    for position, (number, row) in enumerate(rows):
         if len(row) < 2:
             raise LandmarkFileError(f"{path}, line {number}: expected two columns (left, right).")
         cells = [c.strip() for c in row[:2]]
@@ -82,7 +80,7 @@ def read_pair_table(path, names: list[str]):
                                         f"(the landmark file has {len(names)}, numbered from 1).")
         elif all(c in lookup for c in cells):
             indices = [lookup[c] for c in cells]
-        elif number == 1:
+        elif position == 0:
             continue  # a header row
         else:
             missing = next(c for c in cells if c not in lookup)

@@ -7,12 +7,13 @@ import csv
 import io
 
 from .landmark_set import Landmark, LandmarkFileError, LandmarkSet, parse_number, position_of
+from .text_files import csv_records, lines as text_lines
 
 MISSING_PTS_VALUE = 9999.0
 
 
 def read_pts(text: str, path: str) -> LandmarkSet:
-    lines = [line.split() for line in text.splitlines() if line.strip()]
+    lines = [line.split() for line in text_lines(text) if line.strip()]
     if lines and lines[0][0].lower() == "version":
         lines = lines[1:]
     if lines and len(lines[0]) == 1:
@@ -38,16 +39,16 @@ def write_pts(landmarks: LandmarkSet) -> str:
 
 
 def read_csv(text: str, path: str) -> LandmarkSet:
-    rows = [row for row in csv.reader(io.StringIO(text)) if row and any(cell.strip() for cell in row)]
+    rows = csv_records(text)
     if not rows:
         return LandmarkSet([])
-    header = [cell.strip().lower() for cell in rows[0]]
+    header = [cell.strip().lower() for cell in rows[0][1]]
     name_column = next((header.index(h) for h in ("name", "label", "landmark") if h in header), None)
     if name_column is None or not {"x", "y", "z"} <= set(header):
         raise LandmarkFileError(f"{path}: the first row must name the columns name (or label), x, y, z; "
-                                f"got {', '.join(rows[0])}.")
+                                f"got {', '.join(rows[0][1])}.")
     landmarks = []
-    for number, row in enumerate(rows[1:], start=2):
+    for number, row in rows[1:]:
         cells = dict(zip(header, row))
         placed = all(cells.get(axis, "").strip() for axis in "xyz")
         where = f"{path}, line {number}"

@@ -8,6 +8,7 @@ import io
 import json
 
 from .landmark_set import Landmark, LandmarkFileError, LandmarkSet, chosen_index, parse_number, position_of
+from .text_files import csv_records
 
 OLD_FCSV_SYSTEMS = {"0": "RAS", "1": "LPS"}
 SLICER4_COLUMNS = ["id", "x", "y", "z", "ow", "ox", "oy", "oz", "vis", "sel", "lock", "label", "desc",
@@ -20,10 +21,7 @@ def read_fcsv(text: str, path: str) -> LandmarkSet:
     ignored); the frame from ``# CoordinateSystem`` (0/RAS, 1/LPS; RAS when absent: only Slicer 3 and
     early Slicer 4 leave it out, and both wrote RAS). A point whose coordinates are empty is not placed."""
     system, columns, landmarks = None, None, []
-    rows = list(csv.reader(io.StringIO(text)))
-    for number, row in enumerate(rows, start=1):
-        if not row or not any(cell.strip() for cell in row):
-            continue
+    for number, row in csv_records(text):
         if row[0].startswith("#"):
             header = ",".join(row).lstrip("#").strip()
             key, _, value = header.partition("=")
