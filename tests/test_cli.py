@@ -436,6 +436,21 @@ def test_mlx_runs_a_script_of_meshlab_1_3_and_says_what_it_translated(tmp_path, 
     assert output.exists() and old.read_bytes() == written
 
 
+def test_mlx_accepts_a_replacement_when_told_prints_it_and_records_it(tmp_path, bent_cow_files, capsys):
+    mesh_path, *_ = bent_cow_files
+    old = tmp_path / "old.mlx"
+    old.write_text('<!DOCTYPE FilterScript>\n<FilterScript>\n <filter name="Compact vertices"/>\n</FilterScript>\n')
+    output, report = tmp_path / "out.ply", tmp_path / "steps.json"
+    assert main(["mlx", str(old), str(mesh_path), "-o", str(output)]) == 1
+    assert "--accept-replacements" in capsys.readouterr().err and not output.exists()
+    assert main(["mlx", str(old), str(mesh_path), "-o", str(output), "--report", str(report),
+                 "--accept-replacements"]) == 0
+    assert (f"{old}, filter 1: 'Compact vertices' (removed in MeshLab 2021.10) dropped, as accepted: drop the step: "
+            "pymeshlab compacts a mesh itself\n") in capsys.readouterr().err
+    written = json.loads(report.read_text())
+    assert written["accept_replacements"] is True and "dropped, as accepted" in written["steps"][0]["translated"]
+
+
 def test_report_numbers_match_an_independent_computation(tmp_path, bent_cow_files, capsys):
     mesh_path, landmark_path, *_ = bent_cow_files
     output, numbers, picture = tmp_path / "out.ply", tmp_path / "numbers.json", tmp_path / "check.png"

@@ -94,6 +94,60 @@ def test_every_removed_filter_is_refused_with_the_version_that_dropped_it(tmp_pa
     assert (entry["instead"] or "It has no successor; drop the step.") in str(error.value)
 
 
+OLD_POISSON = ('<filter name="Surface Reconstruction: Poisson">'
+               '<Param name="OctDepth" value="6" type="RichInt"/><Param name="SolverDivide" value="6" type="RichInt"/>'
+               '<Param name="SamplesPerNode" value="1" type="RichFloat"/><Param name="Offset" value="1" type="RichFloat"/>'
+               '</filter>')  # as MeshLab 1.3 saved it
+
+
+def test_a_removed_filter_with_a_replacement_is_refused_by_default_and_names_the_way_to_accept_it(tmp_path):
+    ms = sphere()
+    before = meshes(ms)
+    with pytest.raises(ScriptError) as error:
+        apply_filter_script(ms, write_script(tmp_path, OLD_POISSON, "poisson.mlx"))
+    assert ("MeshLab removed this filter in 2016.12. Instead: Surface Reconstruction: Screened Poisson with "
+            "Interpolation Weight 0 comes closest (not identical). To run the replacement, accept it: symblend mlx "
+            "--accept-replacements (Python: apply_filter_script(..., accept_replacements=True)).") in str(error.value)
+    assert all((a == b).all() for pair in zip(before, meshes(ms)) for a, b in zip(*pair))
+
+
+def test_the_old_poisson_accepted_runs_as_screened_poisson_with_its_parameters_mapped(tmp_path):
+    ms, expected = sphere(), sphere()
+    steps = apply_filter_script(ms, write_script(tmp_path, OLD_POISSON, "poisson.mlx"), accept_replacements=True)
+    expected.apply_filter("generate_surface_reconstruction_screened_poisson", depth=6, samplespernode=1.0,
+                          pointweight=0.0)
+    assert ms.mesh_number() == expected.mesh_number() == 2
+    got, want = (np.unique(m.current_mesh().vertex_matrix(), axis=0) for m in (ms, expected))  # threads reorder
+    np.testing.assert_allclose(got, want)
+    assert ms.current_mesh().face_number() == expected.current_mesh().face_number()
+    assert steps[0]["translated"] == (
+        "'Surface Reconstruction: Poisson' (removed in MeshLab 2016.12) replaced, as accepted, by 'Surface "
+        "Reconstruction: Screened Poisson'; parameters translated: OctDepth -> depth, SamplesPerNode -> samplesPerNode; "
+        "added: pointWeight=0; not carried over: SolverDivide=6 (the screened solver has no block Gauss-Seidel "
+        "divide), Offset=1 (the screened solver has no iso-surface offset)")
+
+
+@pytest.mark.parametrize("entry", [e for e in TABLE["removed"] if "replacement" in e], ids=lambda e: e["name"])
+def test_every_recorded_replacement_runs(tmp_path, entry):
+    ms = sphere()
+    before = meshes(ms)
+    steps = apply_filter_script(ms, write_script(tmp_path, f'<filter name="{entry["name"]}"/>', "old.mlx"),
+                                accept_replacements=True)
+    assert f"'{entry['name']}' (removed in MeshLab {entry['dropped_in']})" in steps[0]["translated"]
+    if entry["replacement"]["now"] is None:  # the step is dropped: the mesh as it was
+        assert "dropped, as accepted" in steps[0]["translated"] and steps[0]["output"] is None
+        assert all((a == b).all() for pair in zip(before, meshes(ms)) for a, b in zip(*pair))
+    else:
+        assert filter_names.pymeshlab_filter_name(entry["replacement"]["now"]) is not None
+
+
+def test_accepting_replacements_still_refuses_a_removed_filter_without_one(tmp_path):
+    path = write_script(tmp_path, '<filter name="Select Folded Faces"/>', "old.mlx")
+    with pytest.raises(ScriptError, match=r"MeshLab removed this filter in 2021.10. It has no successor; drop the "
+                                          r"step.$"):
+        apply_filter_script(sphere(), path, accept_replacements=True)
+
+
 def test_every_recorded_meshlab_name_resolves_to_its_filter():
     assert len(TABLE["display_names"]) > 150
     wrong = {f: shown for f, shown in TABLE["display_names"].items() if filter_names.pymeshlab_filter_name(shown) != f}

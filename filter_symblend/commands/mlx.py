@@ -28,8 +28,10 @@ def register(commands) -> None:
                         help="the current mesh after the script; .ply keeps quality and the attributes")
     script.add_argument("--report", type=pathlib.Path, help="write every filter's output as JSON")
     script.add_argument("--overwrite", action="store_true", help="allow -o to name the input mesh (replaced at the end)")
+    script.add_argument("--accept-replacements", action="store_true",
+                        help="run the recorded replacement of a filter MeshLab removed (e.g. the old Poisson "
+                             "reconstruction as Screened Poisson), each printed and kept in the report")
     script.set_defaults(handler=run)
-
 
 
 def run(args) -> int:
@@ -50,10 +52,11 @@ def run(args) -> int:
             warnings.warn(f"{args.script} has width_spacing 0, so its widths are multiples of the semilandmark "
                           f"spacing; set width_spacing to {landmarks['placed_point_spacing']:.4g} (the spacing of "
                           "the placed points) in the script to keep them as without curves.", SymblendWarning)
-    steps = apply_filter_script(ms, args.script, progress_display())
+    steps = apply_filter_script(ms, args.script, progress_display(), args.accept_replacements)
     for number, step in enumerate(steps, start=1):
         if "translated" in step:
             print(f"{args.script}, filter {number}: {step['translated']}", file=sys.stderr)
-    save_with_report(ms, args.output, args.report, {"script": str(args.script), "landmarks": landmarks, "steps": steps})
+    save_with_report(ms, args.output, args.report, {"script": str(args.script), "landmarks": landmarks,
+                                                    "accept_replacements": args.accept_replacements, "steps": steps})
     print(f"{args.output}: {len(steps)} filters of {args.script} applied")
     return 0

@@ -3,7 +3,8 @@
 A script names a filter by its MeshLab name (the Filters menu's), as the
 version that wrote it spelled it. The name is resolved in three steps:
 MeshLab's history (``meshlab_filter_history.json``: filters renamed since
-1.3.x, with their parameters translated, and filters removed), then the
+1.3.x, with their parameters translated, and filters removed, some with a replacement the
+user may accept), then the
 MeshLab names of today's filters (pymeshlab's rename table ``keys.txt`` of
 MeshLab 2021.x names, and the names recorded from pymeshlab itself), then
 pymeshlab's own rule against its filter list. Names compare as pymeshlab compares them (case,
@@ -50,10 +51,23 @@ class Rename:
 
 
 @dataclasses.dataclass(frozen=True)
+class Replacement:
+    """What runs instead of a removed filter when the user accepts it: ``now`` (None: the step is
+    dropped), ``parameters`` and ``added`` as in :class:`Rename`, ``dropped``: old parameter name -> why
+    it has no counterpart."""
+
+    now: str | None
+    parameters: dict
+    added: dict
+    dropped: dict
+
+
+@dataclasses.dataclass(frozen=True)
 class Removal:
     name: str
     dropped_in: str
     instead: str | None
+    replacement: Replacement | None = None
 
 
 @functools.lru_cache(maxsize=None)
@@ -61,8 +75,16 @@ def _history() -> tuple[dict[str, Rename], dict[str, Removal], dict[str, str]]:
     table = json.loads(HISTORY_FILE.read_text(encoding="utf-8"))
     renames = {python_name(r["old"]): Rename(r["old"], r["now"], r["seen_in"], r.get("parameters", {}),
                                              r.get("add", {})) for r in table["renamed"]}
-    removals = {python_name(r["name"]): Removal(r["name"], r["dropped_in"], r["instead"]) for r in table["removed"]}
+    removals = {python_name(r["name"]): Removal(r["name"], r["dropped_in"], r["instead"], _replacement(r))
+                for r in table["removed"]}
     return renames, removals, table.get("display_names", {})
+
+
+def _replacement(removal: dict) -> Replacement | None:
+    given = removal.get("replacement")
+    if given is None:
+        return None
+    return Replacement(given["now"], given.get("parameters", {}), given.get("add", {}), given.get("dropped", {}))
 
 
 def renamed(name: str) -> Rename | None:

@@ -147,34 +147,59 @@ def symblend_options(node: FilterNode, path) -> dict:
 
 # ---- native nodes ------------------------------------------------------------------------------
 
-def _old_node_now(node: FilterNode) -> tuple[FilterNode, str | None]:
-    """The node in today's MeshLab terms, and a note saying what was translated (None if nothing)."""
-    rename = filter_names.renamed(node.name)
-    if rename is None:
-        return node, None
+def _translated(node: FilterNode, now: str, parameters: dict, added: dict) -> tuple[FilterNode, list[str], list[dict]]:
+    """``node`` as the filter ``now``: its parameters renamed and their values translated by ``parameters``
+    (see filter_names.Rename), ``added`` appended where not given; with the "old -> new" names changed and
+    the parameters added."""
     params, changed = [], []
     for param in node.params:
-        change = rename.parameters.get(param["name"])
+        change = parameters.get(param["name"])
         if change:
             changed.append(f"{param['name']} -> {change.get('name', param['name'])}")
             param = dict(param, name=change.get("name", param["name"]), type=change.get("type", param.get("type")),
                          value=change.get("values", {}).get(str(param.get("value")).lower(), param.get("value")))
         params.append(param)
     given = {python_name(p["name"]) for p in params}
-    added = [dict(value, name=name) for name, value in rename.added.items() if python_name(name) not in given]
-    if python_name(rename.old) == python_name(rename.now) and not changed and not added:
-        return node, None  # today's form of a filter whose parameters were renamed
-    note = f"'{rename.old}' (MeshLab {rename.seen_in}) runs as today's '{rename.now}'"
-    if changed:
-        note += f", parameters translated: {', '.join(changed)}"
-    return FilterNode(rename.now, params + added, node.position), note
+    extra = [dict(value, name=name) for name, value in added.items() if python_name(name) not in given]
+    return FilterNode(now, params + extra, node.position), changed, extra
+
+
+def _old_node_now(node: FilterNode, accept_replacements: bool) -> tuple[FilterNode | None, str | None]:
+    """The node in today's MeshLab terms (None: a removed step dropped, as accepted), and a note saying
+    what was translated or replaced (None if nothing)."""
+    rename = filter_names.renamed(node.name)
+    if rename is not None:
+        now, changed, added = _translated(node, rename.now, rename.parameters, rename.added)
+        if python_name(rename.old) == python_name(rename.now) and not changed and not added:
+            return node, None  # today's form of a filter whose parameters were renamed
+        note = f"'{rename.old}' (MeshLab {rename.seen_in}) runs as today's '{rename.now}'"
+        return now, note + (f", parameters translated: {', '.join(changed)}" if changed else "")
+    gone = filter_names.removed(node.name)
+    if not accept_replacements or gone is None or gone.replacement is None:
+        return node, None
+    replacement = gone.replacement
+    note = f"'{node.name}' (removed in MeshLab {gone.dropped_in})"
+    if replacement.now is None:
+        return None, f"{note} dropped, as accepted: {gone.instead}"
+    dropped = {python_name(name): (name, why) for name, why in replacement.dropped.items()}
+    kept = [p for p in node.params if python_name(p["name"]) not in dropped]
+    now, changed, added = _translated(FilterNode(node.name, kept, node.position), replacement.now,
+                                      replacement.parameters, replacement.added)
+    note += f" replaced, as accepted, by '{replacement.now}'"
+    note += f"; parameters translated: {', '.join(changed)}" if changed else ""
+    note += f"; added: {', '.join(p['name'] + '=' + p['value'] for p in added)}" if added else ""
+    gone_values = [f"{p['name']}={p.get('value')} ({dropped[python_name(p['name'])][1]})" for p in node.params
+                   if python_name(p["name"]) in dropped]
+    return now, note + (f"; not carried over: {', '.join(gone_values)}" if gone_values else "")
 
 
 def unknown_filter_message(node: FilterNode, path) -> str:
     gone = filter_names.removed(node.name)
     if gone is not None:
         instead = f" Instead: {gone.instead}." if gone.instead else " It has no successor; drop the step."
-        return f"{node.where(path)}: MeshLab removed this filter in {gone.dropped_in}.{instead}"
+        accept = (" To run the replacement, accept it: symblend mlx --accept-replacements (Python: "
+                  "apply_filter_script(..., accept_replacements=True))." if gone.replacement else "")
+        return f"{node.where(path)}: MeshLab removed this filter in {gone.dropped_in}.{instead}{accept}"
     close = filter_names.closest_filter(node.name, {python_name(DISPLAY_NAME): DISPLAY_NAME})
     hint = ""
     if close and close[1] is None:
@@ -226,22 +251,26 @@ _XML_PARAM_TYPES = {bool: "RichBool", int: "RichInt", float: "RichFloat", str: "
 
 @dataclasses.dataclass
 class NativeCall:
-    """A checked native node (as written): ``ms.apply_filter(filter_name, **values)``; ``mesh_ids``
-    name the parameters that refer to layers (checked to exist just before the call); ``note`` says
-    how a filter of an earlier MeshLab was translated (None if it was not)."""
+    """A checked native node (as written): ``ms.apply_filter(filter_name, **values)``, or nothing when
+    ``filter_name`` is None (a removed step dropped, as accepted); ``mesh_ids`` name the parameters that
+    refer to layers (checked to exist just before the call); ``note`` says how a filter of an earlier
+    MeshLab was translated or replaced (None if it was not)."""
 
     node: FilterNode
-    filter_name: str
+    filter_name: str | None
     values: dict
     mesh_ids: dict[str, int]
     note: str | None = None
 
 
-def native_call(node: FilterNode, path) -> NativeCall:
+def native_call(node: FilterNode, path, accept_replacements: bool = False) -> NativeCall:
     """Check a native node against pymeshlab's own parameter list and convert its values; a filter
-    of an earlier MeshLab runs as the filter it is now, its parameters translated."""
+    of an earlier MeshLab runs as the filter it is now, its parameters translated; a removed filter
+    with a recorded replacement runs as it when ``accept_replacements``."""
     written = node
-    node, note = _old_node_now(node)
+    node, note = _old_node_now(node, accept_replacements)
+    if node is None:
+        return NativeCall(written, None, {}, {}, note)
     filter_name = filter_names.pymeshlab_filter_name(node.name)
     if filter_name is None:
         raise ScriptError(unknown_filter_message(written, path))

@@ -22,9 +22,9 @@ from .mlx import (
 from .recording import recorded_calls, recorded_native_script
 
 
-def _plan(nodes: list[FilterNode], path) -> list:
-    return [(node, symblend_options(node, path)) if node.is_symblend else native_call(node, path)
-            for node in nodes]
+def _plan(nodes: list[FilterNode], path, accept_replacements: bool) -> list:
+    return [(node, symblend_options(node, path)) if node.is_symblend
+            else native_call(node, path, accept_replacements) for node in nodes]
 
 
 def _layers(ms: pymeshlab.MeshSet) -> str:
@@ -41,7 +41,7 @@ def _run(ms: pymeshlab.MeshSet, plan: list, path, cache: dict, progress) -> list
                     raise ScriptError(f"{node.where(path)}: parameter `{name}` refers to layer {mesh_id}, "
                                       f"which does not exist at this step (layers: {_layers(ms)}).")
             try:
-                output = ms.apply_filter(step.filter_name, **step.values)
+                output = ms.apply_filter(step.filter_name, **step.values) if step.filter_name else None
             except pymeshlab.PyMeshLabException as error:
                 raise ScriptError(f"{node.where(path)}: MeshLab failed: {' '.join(str(error).split())}") from None
             if step.note:
@@ -57,17 +57,19 @@ def _run(ms: pymeshlab.MeshSet, plan: list, path, cache: dict, progress) -> list
     return results
 
 
-def apply_filter_script(ms: pymeshlab.MeshSet, path, progress=None) -> list[dict]:
+def apply_filter_script(ms: pymeshlab.MeshSet, path, progress=None, accept_replacements: bool = False) -> list[dict]:
     """Run the .mlx script ``path`` on ``ms``: native MeshLab filters through pymeshlab, our
     node ("{display}") in Python, in order.
 
     Returns one ``{"filter": name, "output": ...}`` per node (what the filter
     returned: measures, our report), with ``"translated"`` saying how a filter
-    of an earlier MeshLab version was run (renamed, parameters translated).
+    of an earlier MeshLab version was run (renamed, parameters translated),
+    or, with ``accept_replacements``, what replaced a filter MeshLab removed
+    (only where the history records a replacement; otherwise it is refused).
     Raises ScriptError naming the node and the problem; the MeshSet is then
     unchanged.
     """
-    plan = _plan(read_filter_script(path), path)
+    plan = _plan(read_filter_script(path), path, accept_replacements)
     if ms.mesh_number() == 0:
         raise MeshSetError("The MeshSet is empty: load the mesh the script works on first.")
     cache: dict = {}
