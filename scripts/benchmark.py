@@ -55,6 +55,7 @@ def main(argv=None) -> None:
                         help="the mirror map against the BCICP dataset's ground-truth self-symmetry")
     parser.add_argument("--quick", action="store_true", help="--mirror-maps: six shapes (about 2 minutes)")
     parser.add_argument("--all-shapes", action="store_true", help="--mirror-maps: every FAUST and TOSCA shape")
+    parser.add_argument("--shapes", nargs="+", help="--mirror-maps: these shapes only (e.g. tr_reg_088 cat4)")
     parser.add_argument("--bcicp", help="--mirror-maps: the dataset (a git snapshot or an unpacked copy)")
     parser.add_argument("--no-pyfm", action="store_true", help="--mirror-maps: leave out the pyFM baseline")
     parser.add_argument("--mode", default="articulated", help="--mirror-maps: the filter's mode")

@@ -26,7 +26,6 @@ from scipy.sparse.csgraph import connected_components
 from ..core.geometry import reflection_across_plane
 from ..core.landmark_asymmetry import fit_mirror_plane
 from ..core.neighbourhoods import connecting_width, mean_nearest_spacing, pair_weights
-from ..core.mirror_planes import surface_mirror_planes
 from ..core.symmetrize import CheckedLandmarks, SymmetrizationResult, check_landmarks, scaled_progress, solve
 from ..errors import DegenerateNeighbourhoodError, GeometryError, SymblendWarning, SymmetryNotFoundError
 from ..parameters import CORE, options_of
@@ -102,13 +101,10 @@ def _intrinsic_first_output(points, surface, core, scored, config, refusal, prog
         checked = check_landmarks(points, left, right, np.arange(1, len(left) + 1), None, ones, ones)
         return solve(points, checked, _connected_options(points, checked, core), warn=False)
 
-    normal, offset = surface_mirror_planes(surface.points[surface.usable_index])[0]
-    before = plane_asymmetry(surface, normal, offset, scored)
-    result, tried = intrinsic_start(surface, config, solve_pairs, lambda out: surface_asymmetry(surface, out, scored),
-                                    before)
+    result, tried = intrinsic_start(surface, config, solve_pairs, lambda out: surface_asymmetry(surface, out, scored))
     if result is None:
-        raise _refusal_saying(refusal, cannot_start(tried, before)) from None
-    tried.update(input_asymmetry=before, refused_maps=str(refusal))
+        raise _refusal_saying(refusal, cannot_start(tried)) from None
+    tried["refused_maps"] = str(refusal)
     return result, tried
 
 

@@ -211,6 +211,31 @@ def zoomout(basis: Eigenbasis, vertex_map: np.ndarray, start: int, stop: int, st
     return vertex_map
 
 
+def reversed_triangles(points: np.ndarray, faces: np.ndarray, vertex_map: np.ndarray) -> np.ndarray:
+    """(f,) bool: whether the vertex map (n,) sends each triangle of ``faces`` (f, 3) of ``points`` (n, 3)
+    onto three distinct vertices with its orientation reversed (the image triangle's normal against the
+    surface's there), as a mirror does to every triangle; the identity and a rotation do it to none, and a
+    map that collapses or scrambles a region fails there."""
+    corners = points[faces]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    vertex_normals = np.zeros_like(points)
+    for k in range(3):
+        np.add.at(vertex_normals, faces[:, k], normals)
+    image = vertex_map[faces]
+    distinct = (image[:, 0] != image[:, 1]) & (image[:, 1] != image[:, 2]) & (image[:, 0] != image[:, 2])
+    moved = points[image]
+    image_normals = np.cross(moved[:, 1] - moved[:, 0], moved[:, 2] - moved[:, 0])
+    return distinct & (np.einsum("ij,ij->i", image_normals, vertex_normals[image].sum(axis=1)) < 0)
+
+
+def reversed_share(points: np.ndarray, faces: np.ndarray, reversed_there: np.ndarray) -> float:
+    """The share of the area of the triangles ``faces`` (f, 3) of ``points`` where ``reversed_there`` (f,)
+    (:func:`reversed_triangles`): one score for any self-map, how much of the surface it mirrors."""
+    corners = points[faces]
+    area = np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+    return float(area[reversed_there].sum() / area.sum())
+
+
 def intrinsic_mirror(mesh: WorkingMesh, config: AutoConfig) -> np.ndarray | None:
     """(n,) the intrinsic mirror of ``mesh`` as a vertex map of its vertices, or None if its spectrum
     cannot be computed."""

@@ -156,6 +156,8 @@ def mirror_maps_main(args) -> None:
         return
     shapes = ({folder: dataset.names(folder) for folder in FOLDERS} if args.all_shapes
               else QUICK if args.quick else SUBSET)
+    if args.shapes:
+        shapes = {folder: [name for name in dataset.names(folder) if name in args.shapes] for folder in FOLDERS}
     print(f"error = |twin(a) - b| / sqrt(area) over every ground-truth pair, both ways (no twin: inf); "
           f"'low conf. finds' = share of the twins wrong by > {WRONG} that have confidence < {CONFIDENT}; "
           "symmetry = RMS |a - mirror(b)| over all ground-truth pairs, % of the diagonal\n")
