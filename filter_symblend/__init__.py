@@ -28,7 +28,8 @@ __all__ = [
 
 try:
     from .meshlab.meshset_filter import (ASYMMETRY_ATTRIBUTE, CONFIDENCE_ATTRIBUTE, DISPLAY_NAME, FILTER_NAME,
-                                         TWIN_ATTRIBUTE, bind_to_meshset, generate_symmetrized_mesh)
+                                         TWIN_ATTRIBUTE, UNCERTAINTY_ATTRIBUTE, bind_to_meshset,
+                                         generate_symmetrized_mesh)
     from .meshlab.mlx import ScriptError
     from .meshlab.script_runner import apply_filter_script, save_filter_script
 except ImportError as error:
@@ -37,4 +38,5 @@ except ImportError as error:
 else:
     bind_to_meshset()
     __all__ += ["ASYMMETRY_ATTRIBUTE", "CONFIDENCE_ATTRIBUTE", "DISPLAY_NAME", "FILTER_NAME", "ScriptError",
-                "TWIN_ATTRIBUTE", "apply_filter_script", "generate_symmetrized_mesh", "save_filter_script"]
+                "TWIN_ATTRIBUTE", "UNCERTAINTY_ATTRIBUTE", "apply_filter_script", "generate_symmetrized_mesh",
+                "save_filter_script"]

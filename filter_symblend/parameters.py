@@ -202,6 +202,16 @@ PARAMETERS: tuple[Parameter, ...] = (
         choices=("mirror", "full", "none"), layer="meshset",
     ),
     Parameter(
+        "uncertainty", "enum", "none", "Uncertainty",
+        "How sure the restoration is. 'jackknife': each landmark pair and midline landmark is left out in turn "
+        "and the restoration repeated (Steps 1 and 2 again; the warp of every repetition in one evaluation); "
+        "the output gets the per-vertex attribute `symblend_uncertainty` (the jackknife standard error of each "
+        "restored vertex, mesh units) and the report `uncertainty` (its median, 90th percentile and max, each "
+        "pair's influence: how far the result moves without it, and the most influential pair). Landmark "
+        "pairs only ('landmarks'), at least 3 of them. 'none': not computed.",
+        choices=("none", "jackknife"),
+    ),
+    Parameter(
         "output_frame", "enum", "input", "Output frame",
         "'input': the result rigidly fitted back onto the input landmarks, for "
         "before/after comparison. 'canonical': symmetry plane x = 0, left (+k) "

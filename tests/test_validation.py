@@ -236,7 +236,7 @@ def test_attribute_names_must_differ(params):
     ms = meshset_with_labels(points, labels_for(16, left, right),
                              attribute=params.get("pair_attribute", "symblend_pair"))
     run_and_expect(ms, ParameterError, r"must be three different names, none of them `symblend_asymmetry`, "
-                   r"`symblend_twin`, `symblend_pair_confidence` \(the filter writes them\)", **params)
+                   r"`symblend_twin`, `symblend_pair_confidence`, `symblend_uncertainty` \(the filter writes them\)", **params)
 
 
 def test_pair_attribute_is_not_a_parameter_of_the_array_core():

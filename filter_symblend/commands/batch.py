@@ -34,11 +34,12 @@ from .files import load_mesh
 from .folder_lock import folder_lock
 from .options import add_filter_options, add_landmark_options, add_missing_option, add_symmetrize_arguments, \
     symmetrize_arguments
-from .symmetrize import symmetrize_files
+from .symmetrize import landmark_name, symmetrize_files
 
 ASYMMETRY_FIELDS = ("landmark_asymmetry_before", "landmark_asymmetry_after", "mirror_asymmetry_before",
                     "mirror_asymmetry_after")  # report entries whose RMS (relative) the summary shows
-SUMMARY_FIELDS = ("mesh", "status", "seconds", *ASYMMETRY_FIELDS, "confident_share", "output", "error")
+SUMMARY_FIELDS = ("mesh", "status", "seconds", *ASYMMETRY_FIELDS, "confident_share", "uncertainty_p90",
+                  "most_influential_pair", "output", "error")
 PATH_COLUMNS = ("mesh", "landmarks", "pair_table")
 OUTPUT_OPTIONS = ("output", "report", "overwrite", "help", "save_pair_table")  # set by the batch, not by a row
 SCHEDULER_TIMEOUT = 30  # seconds to wait for a Dask scheduler to answer
@@ -188,11 +189,16 @@ def run_row(row: Row) -> dict:
 
 def _from_report(report: dict, points) -> dict:
     """What a specimen's summary takes from its report and output points (N, 3): the asymmetry columns
-    (RMS, relative to the diagonal), with automatic pairs the confident share of their map, and its
+    (RMS, relative to the diagonal), with automatic pairs the confident share of their map, with
+    ``uncertainty`` its 90th percentile and the most influential pair's landmark names, and its
     landmarks after symmetrizing ([[name, x, y, z], ...])."""
     figures = {key: f"{report[key]['rms_relative']:.6g}" for key in ASYMMETRY_FIELDS if key in report}
     if "auto_pairs" in report:  # the share of the surface whose automatic twin is confident
         figures["confident_share"] = f"{report['auto_pairs']['mirror_map']['confident_share']:.3g}"
+    if "uncertainty" in report:  # the jackknife's 90th percentile (relative) and the pair that moves it most
+        figures["uncertainty_p90"] = f"{report['uncertainty']['p90_relative']:.6g}"
+        figures["most_influential_pair"] = landmark_name(report["uncertainty"]["most_influential_pair"],
+                                                         report.get("landmarks"))
     placed = (report.get("landmarks") or {}).get("vertices", [])
     return {**figures, "landmarks": [[name, *map(float, points[vertex])] for name, vertex in placed]}
 

@@ -73,6 +73,26 @@ def run(args) -> int:
     if "hausdorff_input_output" in report:
         checks += f"; two-way Hausdorff input<->output {report['hausdorff_input_output']['max']:.4g}"
     print(f"{args.output}: {pairs}, mode {report['mode']}; {landmark_line}{checks}".rstrip("; "))
+    if "uncertainty" in report:
+        print(uncertainty_line(report["uncertainty"], report.get("landmarks")))
     for message in report.get("warnings", []):
         print(f"warning: {message}", file=sys.stderr)
     return 0
+
+
+def landmark_name(unit: str, landmarks: dict | None) -> str:
+    """The file's names for a pair id or ``midline k`` of the filter's report (the id when not from a file)."""
+    if not landmarks:
+        return f"pair {unit}" if unit.isdigit() else unit
+    if unit.isdigit():
+        return "/".join(landmarks["pairs"][int(unit) - 1])
+    return landmarks["midline"][int(unit.split()[-1]) - 1]
+
+
+def uncertainty_line(uncertainty: dict, landmarks: dict | None) -> str:
+    """One line of the report's ``uncertainty``, the most influential pair by its landmark names."""
+    top = uncertainty["most_influential_pair"]
+    return (f"uncertainty (jackknife, {uncertainty['left_out']} landmarks left out in turn): median "
+            f"{uncertainty['median_relative']:.3%}, p90 {uncertainty['p90_relative']:.3%}, max "
+            f"{uncertainty['max_relative']:.3%} of the diagonal; most influential: {landmark_name(top, landmarks)} "
+            f"(the result moves up to {uncertainty['influence_relative'][top]:.3%} without it)")

@@ -37,12 +37,15 @@ class SymmetrizationResult:
     report: pair count, plane, landmark asymmetry before/after, widths, seconds.
     mirror_pairs: with automatic pairs, the mirror map they came from (every vertex's twin, with its
     confidence); None with landmark pairs alone.
+    uncertainty (N,): with ``uncertainty='jackknife'``, the jackknife standard error of each restored
+    vertex, mesh units (core/uncertainty); else None.
     """
 
     points: np.ndarray
     asymmetry: np.ndarray
     report: dict[str, Any]
     mirror_pairs: MirrorPairs | None = None
+    uncertainty: np.ndarray | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -137,11 +140,32 @@ def _report_progress(progress, percent: float, message: str) -> None:
         progress(percent, message)
 
 
-def solve(points: np.ndarray, landmarks: CheckedLandmarks, options: dict, progress=None,
-          warn: bool = True) -> SymmetrizationResult:
-    """Step 1, Step 2 and the warp for checked ``landmarks`` on ``points`` (N, 3), with validated core
-    ``options``; ``warn``: warn about pairs that look swapped or are poor mirror images."""
-    clock = {"start": time.perf_counter()}
+@dataclasses.dataclass(frozen=True)
+class LandmarkTargets:
+    """Steps 1 and 2 on checked landmarks: where each landmark vertex goes. ``vertices`` (k,): the landmark
+    vertices (left sides, right sides, midline), ``target`` (k, 3) their symmetric positions in the input
+    frame; ``solved`` (k, 3) the same in the canonical frame (plane x = 0) and ``rotation``, ``translation``
+    the rigid map from it to the input frame; ``local`` Step 1; the widths and spacings used."""
+
+    vertices: np.ndarray
+    target: np.ndarray
+    solved: np.ndarray
+    rotation: np.ndarray
+    translation: np.ndarray
+    local: LocalSymmetries
+    flat: np.ndarray | None
+    measured_spacing: float
+    spacing: float
+    phi_h: float
+    theta_h: float
+
+
+def landmark_targets(points: np.ndarray, landmarks: CheckedLandmarks, options: dict, progress=None,
+                     warn: bool = False, clock: dict | None = None) -> LandmarkTargets:
+    """Step 1 and Step 2 (the paper's local symmetries and their blend) for checked ``landmarks`` on
+    ``points`` (N, 3), with validated core ``options``; ``warn``: warn about pairs that look swapped or
+    are poor mirror images; ``clock``: stage end times are added to it."""
+    clock = {} if clock is None else clock
     left, right, ids, midline = landmarks.left, landmarks.right, landmarks.ids, landmarks.midline
     wl, wr = landmarks.left_weights, landmarks.right_weights
     # Midline landmarks join the solve as pairs whose two sides are one vertex,
@@ -154,11 +178,9 @@ def solve(points: np.ndarray, landmarks: CheckedLandmarks, options: dict, progre
     unique = np.concatenate([left, right, midline])  # each landmark vertex once: warp centres
 
     p, q = points[all_left], points[all_right]
-    landmarks = points[unique]
-    diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
-    centre = landmarks.mean(axis=0)
+    centre = points[unique].mean(axis=0)
     p0, q0 = p - centre, q - centre
-    measured_spacing = mean_nearest_spacing(landmarks)
+    measured_spacing = mean_nearest_spacing(points[unique])
     spacing = options["width_spacing"] or measured_spacing
     phi_h, theta_h = options["phi_width"] * spacing, options["theta_width"] * spacing
     phi = pair_weights(p0, q0, phi_h)
@@ -189,12 +211,26 @@ def solve(points: np.ndarray, landmarks: CheckedLandmarks, options: dict, progre
             "The solve gave non-finite coordinates: its system is singular for these pairs (e.g. pairs far "
             "from each other at this `phi_width`, or landmarks in a degenerate layout). Check the pairs, or "
             "raise `phi_width`.")
-    rotation, translation = rigid_fit(solved, landmarks, np.concatenate([wl[:n], wr[:n], np.ones(m)]))
+    rotation, translation = rigid_fit(solved, points[unique], np.concatenate([wl[:n], wr[:n], np.ones(m)]))
     clock["global_solve"] = time.perf_counter()
+    return LandmarkTargets(unique, solved @ rotation.T + translation, solved, rotation, translation, local, flat,
+                           measured_spacing, spacing, phi_h, theta_h)
+
+
+def solve(points: np.ndarray, landmarks: CheckedLandmarks, options: dict, progress=None,
+          warn: bool = True) -> SymmetrizationResult:
+    """Step 1, Step 2 and the warp for checked ``landmarks`` on ``points`` (N, 3), with validated core
+    ``options``; ``warn``: warn about pairs that look swapped or are poor mirror images."""
+    clock = {"start": time.perf_counter()}
+    left, right = landmarks.left, landmarks.right
+    steps = landmark_targets(points, landmarks, options, progress, warn, clock)
+    unique, solved, rotation, translation = steps.vertices, steps.solved, steps.rotation, steps.translation
+    flat, local, centres = steps.flat, steps.local, points[unique]
+    diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
     _report_progress(progress, 50.0, f"warping {len(points)} vertices")
 
-    target = solved @ rotation.T + translation
-    spline = thin_plate_spline(landmarks, target - landmarks, flat)
+    target = steps.target
+    spline = thin_plate_spline(centres, target - centres, flat)
     warped = points.copy()
     warped[unique] = target
     others = np.ones(len(points), dtype=bool)  # the landmarks' own values are the targets: not evaluated
@@ -221,8 +257,8 @@ def solve(points: np.ndarray, landmarks: CheckedLandmarks, options: dict, progre
     _report_progress(progress, 100.0, "done")
 
     report = {
-        "pair_count": int(n),
-        "midline_count": int(m),
+        "pair_count": int(len(left)),
+        "midline_count": int(len(landmarks.midline)),
         "mode": options["mode"],
         "output_frame": options["output_frame"],
         "plane_normal": normal.tolist(),
@@ -234,12 +270,12 @@ def solve(points: np.ndarray, landmarks: CheckedLandmarks, options: dict, progre
         "landmark_asymmetry_after": fit_mirror_plane(warped[left], warped[right]).summary(diagonal),
         "vertex_displacement": _summary(asymmetry),
         "diagonal": diagonal,
-        "mean_landmark_spacing": measured_spacing,
-        "width_spacing": spacing,
+        "mean_landmark_spacing": steps.measured_spacing,
+        "width_spacing": steps.spacing,
         "phi_width": options["phi_width"],
-        "phi_h": phi_h,
+        "phi_h": steps.phi_h,
         "theta_width": options["theta_width"],
-        "theta_h": theta_h,
+        "theta_h": steps.theta_h,
         "alpha": options["alpha"],
         "local_fit_residual": {"median": float(np.median(local.residuals)),
                                "max": float(local.residuals.max())},

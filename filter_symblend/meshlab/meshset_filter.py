@@ -33,7 +33,8 @@ DISPLAY_NAME = "Symmetrize: Closed-form Blending of Local Symmetries"
 ASYMMETRY_ATTRIBUTE = "symblend_asymmetry"
 TWIN_ATTRIBUTE = "symblend_twin"  # per-vertex point: the vertex's mirror twin on the output (NaN: none)
 CONFIDENCE_ATTRIBUTE = "symblend_pair_confidence"  # per-vertex scalar in [0, 1] (0: no twin)
-WRITTEN = (ASYMMETRY_ATTRIBUTE, TWIN_ATTRIBUTE, CONFIDENCE_ATTRIBUTE)
+UNCERTAINTY_ATTRIBUTE = "symblend_uncertainty"  # per-vertex scalar: jackknife standard error, mesh units
+WRITTEN = (ASYMMETRY_ATTRIBUTE, TWIN_ATTRIBUTE, CONFIDENCE_ATTRIBUTE, UNCERTAINTY_ATTRIBUTE)
 _SCRATCH = ("symblend_scratch_x", "symblend_scratch_y", "symblend_scratch_z",
             "symblend_scratch_quality")
 
@@ -63,6 +64,8 @@ def _add_output_layer(ms: pymeshlab.MeshSet, input_id: int, result, carried: dic
             twin, confidence = result.mirror_pairs.per_vertex(result.points)
             output.add_vertex_custom_point_attribute(twin, TWIN_ATTRIBUTE)
             output.add_vertex_custom_scalar_attribute(confidence, CONFIDENCE_ATTRIBUTE)
+        if result.uncertainty is not None:
+            output.add_vertex_custom_scalar_attribute(result.uncertainty, UNCERTAINTY_ATTRIBUTE)
         if not output.is_point_cloud():
             ms.compute_normal_per_face()
             ms.compute_normal_per_vertex()

@@ -15,6 +15,8 @@ from ..core.landmark_pairs import check_points
 from ..core.symmetrize import CheckedLandmarks, check_landmarks
 from ..errors import LandmarkError, ParameterError
 
+MINIMUM_UNITS = 3  # landmark pairs and midline landmarks the jackknife needs: each left out leaves two
+
 
 @dataclasses.dataclass(frozen=True)
 class Problem:
@@ -56,8 +58,24 @@ def build_problem(points, options: dict, left=None, right=None, pair_ids=None, m
                             "`right` vertex indices, or use pairs='auto'.")
     landmarks = None if options["pairs"] == "auto" else check_landmarks(points, left, right, pair_ids, midline,
                                                                         left_weights, right_weights)
+    _check_uncertainty(options, landmarks)
     return Problem(points, faces, landmarks, options, excluded, *(region or (None, None)),
                    auto_config or DEFAULT)
+
+
+def _check_uncertainty(options: dict, landmarks) -> None:
+    """ParameterError if ``uncertainty`` cannot be measured for these pairs."""
+    if options["uncertainty"] == "none":
+        return
+    if options["pairs"] != "landmarks":
+        raise ParameterError(f"`uncertainty='{options['uncertainty']}'` leaves out each landmark pair in turn; with "
+                             f"pairs='{options['pairs']}' the automatic pairs are not measured yet. Use "
+                             "pairs='landmarks' (e.g. the pairs written by `symblend pairs`), or uncertainty='none'.")
+    units = len(landmarks.left) + len(landmarks.midline)
+    if units < MINIMUM_UNITS:
+        raise ParameterError(f"`uncertainty='{options['uncertainty']}'` leaves out each landmark pair and midline "
+                             f"landmark in turn, and needs at least {MINIMUM_UNITS} of them; there are {units}. "
+                             "Add landmarks, or use uncertainty='none'.")
 
 
 def _excluded_vertices(auto_excluded, count: int, pairs: str) -> np.ndarray | None:

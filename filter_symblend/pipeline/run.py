@@ -11,7 +11,8 @@ import numpy as np
 from ..auto import symmetrize_automatic
 from ..core.mirror_fill import fill_from_mirror
 from ..core.mirror_pairs import MirrorPairs
-from ..core.symmetrize import SymmetrizationResult, solve
+from ..core.symmetrize import SymmetrizationResult, landmark_targets, scaled_progress, solve
+from ..core.uncertainty import jackknife
 from ..errors import ParameterError
 from ..parameters import ARRAYS, CORE, keyword_signature, options_of, parameters_doc, validate_parameters
 from .problem import Problem, build_problem
@@ -32,6 +33,20 @@ def _filled(result: SymmetrizationResult, points, faces, missing, missing_faces,
     return result
 
 
+def _with_uncertainty(result: SymmetrizationResult, problem: Problem, core: dict, progress) -> SymmetrizationResult:
+    """``result`` with the jackknife of its landmarks (core/uncertainty): per-vertex values and the report's
+    ``uncertainty``."""
+    if progress is not None:
+        progress(70.0, f"uncertainty: each of {len(problem.landmarks.left) + len(problem.landmarks.midline)} "
+                       "landmarks left out in turn")
+    full = landmark_targets(problem.points, problem.landmarks, core)
+    measured = jackknife(problem.points, problem.landmarks, core, full)
+    result.report["uncertainty"] = measured.summary(result.report["diagonal"])
+    if progress is not None:
+        progress(100.0, "done")
+    return dataclasses.replace(result, uncertainty=measured.per_vertex)
+
+
 def solve_problem(problem: Problem, progress=None) -> SymmetrizationResult:
     """The symmetrization of a validated ``problem``: the landmarks' solve, the automatic pairs' rounds, or
     both, then the missing part filled from its mirror; ``progress(percent, message)`` at each stage."""
@@ -41,7 +56,11 @@ def solve_problem(problem: Problem, progress=None) -> SymmetrizationResult:
     if progress is not None:
         progress(0.0, "input checked")
     if options["pairs"] == "landmarks":
-        result = solve(problem.points, problem.landmarks, options_of(options, CORE), progress)
+        core = options_of(options, CORE)
+        result = solve(problem.points, problem.landmarks, core, scaled_progress(progress, 0.0, 70.0)
+                       if options["uncertainty"] != "none" else progress)
+        if options["uncertainty"] == "jackknife":
+            result = _with_uncertainty(result, problem, core, progress)
     else:
         result = symmetrize_automatic(problem.points, problem.faces, options, problem.landmarks, problem.excluded,
                                       progress, problem.auto_config)

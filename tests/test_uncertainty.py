@@ -1,0 +1,171 @@
+"""Uncertainty (issue 49): the jackknife of a restoration, checked against the same jackknife done the slow way
+(each restoration computed in full without one landmark), against a landmark known to be misplaced, and through
+the MeshSet filter, the command and its errors."""
+
+import json
+
+import numpy as np
+import pymeshlab
+import pytest
+
+from filter_symblend import UNCERTAINTY_ATTRIBUTE, GeometryError, ParameterError, symmetrize, synthetic
+from filter_symblend.commands.main import main
+from filter_symblend.core import uncertainty
+from filter_symblend.core.geometry import rigid_fit
+from filter_symblend.core.symmetrize import check_landmarks
+from filter_symblend.landmarks.files import Landmark, LandmarkSet, write_landmarks
+from filter_symblend.meshlab.attributes import optional_attribute
+from filter_symblend.meshlab.ply_attributes import read_ply_vertex_properties
+from filter_symblend.parameters import CORE, DEFAULTS, options_of
+from conftest import meshset_with_pairs
+
+
+def _slow_jackknife(points, left, right, mode):
+    """Per-vertex jackknife standard error and per-pair influence, each restoration computed in full by
+    ``symmetrize`` without one pair, fitted rigidly onto the full one at the common landmarks."""
+    full = symmetrize(points, left, right, mode=mode)
+    spacing = full.report["width_spacing"]
+    moved = []
+    for j in range(len(left)):
+        keep = np.arange(len(left)) != j
+        out = symmetrize(points, left[keep], right[keep], mode=mode, width_spacing=spacing).points
+        common = np.concatenate([left[keep], right[keep]])
+        rotation, translation = rigid_fit(out[common], full.points[common])
+        moved.append(out @ rotation.T + translation - full.points)
+    moved = np.stack(moved, axis=1)  # (N, J, 3)
+    count = len(left)
+    centred = moved - moved.mean(axis=1, keepdims=True)
+    spread = np.sqrt((count - 1) / count * (centred**2).sum(axis=(1, 2)))
+    return spread, np.linalg.norm(moved, axis=2).max(axis=0)
+
+
+@pytest.mark.parametrize("mode", ["standard", "affine", "articulated"])
+def test_the_jackknife_equals_the_slow_one_restoration_by_restoration(cow, mode):
+    points = synthetic.compress(synthetic.bend(cow.points, 0.5), [0, 0, 1], 0.8)
+    left, right = cow.landmarks(16)
+    result = symmetrize(points, left, right, mode=mode, uncertainty="jackknife")
+    spread, influence = _slow_jackknife(points, left, right, mode)
+    diagonal = result.report["diagonal"]
+    np.testing.assert_allclose(result.uncertainty, spread, atol=1e-7 * diagonal)
+    measured = result.report["uncertainty"]
+    np.testing.assert_allclose([measured["influence_relative"][str(k)] for k in range(1, 17)], influence / diagonal,
+                               atol=1e-7)
+    assert measured["most_influential_pair"] == str(np.argmax(influence) + 1)
+    assert measured["left_out"] == 16 and measured["kept_in"] == {}
+    assert measured["p90_relative"] == pytest.approx(np.percentile(spread, 90) / diagonal, rel=1e-6)
+    assert spread.max() > 1e-4 * diagonal  # a bent, compressed cow from 16 pairs is not known exactly
+
+
+def test_the_same_restoration_with_and_without_uncertainty(cow):
+    points = synthetic.bend(cow.points, 0.4)
+    left, right = cow.landmarks(20)
+    plain = symmetrize(points, left, right, mode="affine")
+    measured = symmetrize(points, left, right, mode="affine", uncertainty="jackknife")
+    np.testing.assert_array_equal(plain.points, measured.points)
+    assert plain.uncertainty is None and "uncertainty" not in plain.report
+
+
+def test_a_landmark_far_off_its_place_is_the_most_influential(cow):
+    """One right landmark of 40 moved 10 % of the diagonal: in each of 5 random sets it is named."""
+    points = synthetic.bend(cow.points, 0.3)
+    rng = np.random.default_rng(7)
+    pool_left, pool_right = cow.landmarks(80)
+    for _ in range(5):
+        pick = rng.choice(80, 40, replace=False)
+        left, right = pool_left[pick], pool_right[pick].copy()
+        j = int(rng.integers(40))
+        distance = np.linalg.norm(cow.points - cow.points[right[j]], axis=1)
+        right[j] = np.argmin(np.abs(distance - 0.10 * cow.diagonal))
+        report = symmetrize(points, left, right, uncertainty="jackknife").report["uncertainty"]
+        assert report["most_influential_pair"] == str(j + 1)
+
+
+def test_a_pair_that_holds_the_others_together_is_kept_in_and_said():
+    """Two groups of three pairs joined by one pair between them: without it the pairs fall apart."""
+    ys = np.array([0.0, 0.1, 0.2, 1.0, 1.8, 1.9, 2.0])
+    left = np.column_stack([np.ones(7), ys, 0.1 * np.sin(7 * ys)])
+    points = np.vstack([left, left * [-1.0, 1.0, 1.0] + [0.0, 0.0, 0.02]])
+    pairs = np.arange(7), np.arange(7, 14)
+    result = symmetrize(points, *pairs, phi_width=2.5, uncertainty="jackknife")
+    kept = result.report["uncertainty"]["kept_in"]
+    assert list(kept) == ["4"] and kept["4"].startswith("The landmark pairs fall apart into 2 groups")
+    assert result.report["uncertainty"]["left_out"] == 6
+
+
+def test_errors_name_the_problem_and_the_fix(cow, monkeypatch):
+    left, right = cow.landmarks(10)
+    with pytest.raises(ParameterError, match=r"`uncertainty='jackknife'` leaves out each landmark pair in turn; with "
+                                             r"pairs='landmarks\+auto' the automatic pairs are not measured yet\. Use "
+                                             r"pairs='landmarks'"):
+        symmetrize(cow.points, left, right, faces=cow.faces, pairs="landmarks+auto", uncertainty="jackknife")
+    drawing = np.array([[1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [-1.0, 1.0, 0.0], [0.0, 2.0, 0.0]])
+    with pytest.raises(ParameterError, match=r"needs at least 3 of them; there are 2\. Add landmarks, or use "
+                                             r"uncertainty='none'\."):
+        symmetrize(drawing, [0, 1], [2, 3], uncertainty="jackknife")  # a flat drawing: two pairs are enough
+    with pytest.raises(ParameterError, match=r"`uncertainty` must be one of 'none', 'jackknife', got 'bootstrap'"):
+        symmetrize(cow.points, left, right, uncertainty="bootstrap")
+    full_solve = uncertainty.landmark_targets
+
+    def all_but_the_full_solve_fail(points, landmarks, options, *rest):
+        if len(landmarks.left) < 10:
+            raise GeometryError("the pairs fall apart")
+        return full_solve(points, landmarks, options, *rest)
+
+    monkeypatch.setattr(uncertainty, "landmark_targets", all_but_the_full_solve_fail)
+    checked = check_landmarks(cow.points, left, right)
+    options = options_of(DEFAULTS, CORE)
+    with pytest.raises(GeometryError, match=r"The jackknife needs two landmark pairs or midline landmarks that can be "
+                                            r"left out, and 0 can \(without pair 1: the pairs fall apart\)\. Add landmarks"):
+        uncertainty.jackknife(cow.points, checked, options, full_solve(cow.points, checked, options))
+
+
+def test_the_meshset_filter_writes_the_uncertainty_on_its_output_layer(cow):
+    points = synthetic.bend(cow.points, 0.4)
+    left, right = cow.landmarks(20)
+    ms = meshset_with_pairs(points, cow.faces, left, right)
+    report = ms.generate_symmetrized_mesh(mode="affine", uncertainty="jackknife", checks="none")
+    values = ms.current_mesh().vertex_custom_scalar_attribute_array(UNCERTAINTY_ATTRIBUTE)
+    expected = symmetrize(points, left, right, mode="affine", uncertainty="jackknife")
+    np.testing.assert_allclose(values, expected.uncertainty, rtol=1e-12, atol=1e-15)
+    assert report["uncertainty"]["most_influential_pair"] == expected.report["uncertainty"]["most_influential_pair"]
+    assert optional_attribute(ms.mesh(report["input_mesh_id"]), UNCERTAINTY_ATTRIBUTE) is None  # input untouched
+
+
+def test_the_command_prints_it_by_landmark_name_and_saves_it_in_the_ply(tmp_path, cow, capsys):
+    points = synthetic.bend(cow.points, 0.4)
+    left, right = cow.landmarks(12)
+    mesh, landmarks, output, report = (tmp_path / name for name in ("bent.ply", "bent.pp", "out.ply", "out.json"))
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(points, cow.faces))
+    ms.save_current_mesh(str(mesh))
+    write_landmarks(landmarks, LandmarkSet([Landmark(f"{side}_point{k}", tuple(points[v])) for k in range(12)
+                                            for side, v in (("L", left[k]), ("R", right[k]))]))
+    assert main(["symmetrize", str(mesh), "-l", str(landmarks), "-o", str(output), "--report", str(report),
+                 "--uncertainty", "jackknife"]) == 0
+    written = json.loads(report.read_text())["uncertainty"]
+    top = int(written["most_influential_pair"])
+    line = capsys.readouterr().out.splitlines()[-1]
+    assert line.startswith("uncertainty (jackknife, 12 landmarks left out in turn): median ")
+    assert f"most influential: L_point{top - 1}/R_point{top - 1} (the result moves up to " in line
+    saved = read_ply_vertex_properties(output)[UNCERTAINTY_ATTRIBUTE]
+    assert np.percentile(saved, 90) / np.linalg.norm(np.ptp(points, axis=0)) == pytest.approx(
+        written["p90_relative"], rel=1e-5)
+
+
+def test_a_batch_row_with_the_jackknife_summarizes_it(tmp_path, cow):
+    from filter_symblend.commands.batch import read_manifest, run_row
+    points = synthetic.bend(cow.points, 0.4)
+    left, right = cow.landmarks(12)
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(points, cow.faces))
+    ms.save_current_mesh(str(tmp_path / "bent.ply"))
+    write_landmarks(tmp_path / "bent.pp", LandmarkSet([Landmark(f"{side}_point{k}", tuple(points[v])) for k in range(12)
+                                                       for side, v in (("L", left[k]), ("R", right[k]))]))
+    (tmp_path / "study.csv").write_text("mesh,landmarks,uncertainty\nbent.ply,bent.pp,jackknife\n")
+    [row] = read_manifest(tmp_path / "study.csv", tmp_path / "out")
+    (tmp_path / "out").mkdir()
+    summary = run_row(row)
+    report = json.loads(row.report.read_text())["uncertainty"]
+    top = int(report["most_influential_pair"])
+    assert summary["status"] == "ok" and summary["most_influential_pair"] == f"L_point{top - 1}/R_point{top - 1}"
+    assert float(summary["uncertainty_p90"]) == pytest.approx(report["p90_relative"], rel=1e-5)
