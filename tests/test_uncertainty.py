@@ -150,6 +150,12 @@ def test_the_command_prints_it_by_landmark_name_and_saves_it_in_the_ply(tmp_path
     saved = read_ply_vertex_properties(output)[UNCERTAINTY_ATTRIBUTE]
     assert np.percentile(saved, 90) / np.linalg.norm(np.ptp(points, axis=0)) == pytest.approx(
         written["p90_relative"], rel=1e-5)
+    pictures = {}
+    for name, after in (("plain", mesh), ("jackknife", output)):  # the bent mesh has no uncertainty to show
+        pictures[name] = tmp_path / f"{name}.png"
+        assert main(["report", str(mesh), str(after), "--png", str(pictures[name])]) == 0
+    heights = {name: int.from_bytes(path.read_bytes()[20:24], "big") for name, path in pictures.items()}  # PNG IHDR
+    assert heights["jackknife"] == pytest.approx(1.5 * heights["plain"], abs=2)  # a third row: the uncertainty
 
 
 def test_a_batch_row_with_the_jackknife_summarizes_it(tmp_path, cow):

@@ -1,4 +1,5 @@
-"""A picture of a before/after check: both meshes, coloured by mirror asymmetry, from three views.
+"""A picture of a before/after check: both meshes, coloured by mirror asymmetry, from three views (and the
+output coloured by its uncertainty, when it has one).
 
 The views are the object's own, decided by the output's mirror plane whatever the file's axes: along
 the plane (left and right side by side), along the plane's normal (one side), and along the shape's
@@ -51,12 +52,15 @@ def _draw(axis, mesh: dict, frame: np.ndarray, view_axis: int, colours) -> None:
     axis.axis("off")
 
 
-def render_comparison(path, before: dict, after: dict, titles=("before", "after")) -> list[tuple[str, list]]:
-    """Write a PNG: a row per mesh, a column per view, one shared colour bar (mesh units). The
+def render_comparison(path, before: dict, after: dict, titles=("before", "after"),
+                      uncertainty: dict | None = None) -> list[tuple[str, list]]:
+    """Write a PNG: a row per mesh, a column per view, one shared colour bar (mesh units); with
+    ``uncertainty`` a third row, the ``after`` mesh coloured by it on a colour bar of its own. The
     views look along the axes of the ``after`` mesh's symmetry frame (see the module docstring).
 
     ``before`` and ``after`` hold ``points`` (N, 3), ``faces`` (F, 3), ``per_vertex`` (N,)
-    asymmetry, ``plane_normal`` (3,), and the summary's ``p90_relative`` and ``rms``.
+    asymmetry, ``plane_normal`` (3,), and the summary's ``p90_relative`` and ``rms``; ``uncertainty``
+    holds ``per_vertex`` (N,) (the jackknife's standard error, mesh units) and ``p90_relative``.
     Returns each view's title and the unit vector (3,) it looks along, in the meshes' frame.
     """
     try:
@@ -70,15 +74,29 @@ def render_comparison(path, before: dict, after: dict, titles=("before", "after"
     top = max(float(before["per_vertex"].max()), float(after["per_vertex"].max()), 1e-12)
     norm = matplotlib.colors.Normalize(0.0, top)
     colormap = matplotlib.colormaps["viridis"]
-    figure, axes = plt.subplots(2, len(VIEWS), figsize=(5 * len(VIEWS), 9), constrained_layout=True)
+    rows = 2 if uncertainty is None else 3
+    figure, axes = plt.subplots(rows, len(VIEWS), figsize=(5 * len(VIEWS), 4.5 * rows), constrained_layout=True)
     frame = _plane_frame(after["points"], after["plane_normal"])  # one frame: the same views of both
     for row, (mesh, title) in enumerate(zip((before, after), titles)):
         for column, (view, view_axis) in enumerate(VIEWS):
             _draw(axes[row, column], mesh, frame, view_axis, lambda values: colormap(norm(values)))
             figures = f"\np90 {mesh['p90_relative']:.3%} of the diagonal, RMS {mesh['rms']:.3g}"
             axes[row, column].set_title(f"{title}\n{view}" + (figures if column == 0 else ""), fontsize=9, wrap=True)
-    bar = figure.colorbar(matplotlib.cm.ScalarMappable(norm, colormap), ax=axes, shrink=0.6, orientation="horizontal")
+    bar = figure.colorbar(matplotlib.cm.ScalarMappable(norm, colormap), ax=axes[:2], shrink=0.6,
+                          orientation="horizontal")
     bar.set_label("mirror asymmetry: distance to the reflected surface (mesh units)")
+    if uncertainty is not None:
+        spread = matplotlib.colors.Normalize(0.0, max(float(uncertainty["per_vertex"].max()), 1e-12))
+        heat = matplotlib.colormaps["magma"]
+        mesh = dict(after, per_vertex=uncertainty["per_vertex"])
+        for column, (view, view_axis) in enumerate(VIEWS):
+            _draw(axes[2, column], mesh, frame, view_axis, lambda values: heat(spread(values)))
+            figures = f"\np90 {uncertainty['p90_relative']:.3%} of the diagonal"
+            axes[2, column].set_title(f"{titles[1]}: uncertainty\n{view}" + (figures if column == 0 else ""),
+                                      fontsize=9, wrap=True)
+        bar = figure.colorbar(matplotlib.cm.ScalarMappable(spread, heat), ax=axes[2], shrink=0.6,
+                              orientation="horizontal")
+        bar.set_label("uncertainty: jackknife standard error of each restored vertex (mesh units)")
     figure.savefig(path, dpi=100)
     plt.close(figure)
     return [(view, frame[view_axis].tolist()) for view, view_axis in VIEWS]

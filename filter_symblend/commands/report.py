@@ -6,11 +6,15 @@ from __future__ import annotations
 import pathlib
 import sys
 
+import numpy as np
+
 from ..atomic import all_or_none
 from ..checks.surface_asymmetry import CHECK_SAMPLES
 from ..checks.verdict import result_warnings
 from ..core.mirror_fill import distances_to_surface
+from ..meshlab.attributes import optional_attribute
 from ..meshlab.layer_checks import compare_layers
+from ..meshlab.meshset_filter import UNCERTAINTY_ATTRIBUTE
 from .files import check_outputs, load_mesh, report_json, save_quality_ply
 
 
@@ -20,7 +24,8 @@ def register(commands) -> None:
     report.add_argument("before", type=pathlib.Path, help="mesh before symmetrizing")
     report.add_argument("after", type=pathlib.Path, help="mesh after symmetrizing")
     report.add_argument("--png", type=pathlib.Path,
-                        help="picture of both meshes coloured by mirror asymmetry (needs matplotlib)")
+                        help="picture of both meshes coloured by mirror asymmetry, and of the output by its "
+                             "uncertainty when it has one (symblend_uncertainty; needs matplotlib)")
     report.add_argument("--json", type=pathlib.Path, help="write the numbers as JSON")
     report.add_argument("--per-vertex", action="store_true",
                         help="add each vertex's Hausdorff distance (before -> after and after -> before) to the JSON")
@@ -72,7 +77,11 @@ def run(args) -> int:
 
             meshes = [dict(result[key], points=ms.mesh(mesh_id).vertex_matrix(), faces=ms.mesh(mesh_id).face_matrix())
                       for key, mesh_id in (("mirror_asymmetry_before", before_id), ("mirror_asymmetry_after", after_id))]
-            result["png_views"] = render_comparison(picture_file, *meshes, titles=(args.before.name, args.after.name))
+            spread = optional_attribute(after_mesh, UNCERTAINTY_ATTRIBUTE)  # a jackknife's output shows it
+            uncertainty = None if spread is None else {
+                "per_vertex": spread, "p90_relative": float(np.percentile(spread, 90)) / before_mesh.bounding_box().diagonal()}
+            result["png_views"] = render_comparison(picture_file, *meshes, titles=(args.before.name, args.after.name),
+                                                    uncertainty=uncertainty)
         if args.json:
             json_file.write_text(report_json(result), encoding="utf-8")
     if args.distance_ply:
