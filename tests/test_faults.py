@@ -99,3 +99,24 @@ def test_symblend_report_writes_all_its_files_or_none(sphere_file, tmp_path, cap
     assert sorted(p.name for p in tmp_path.iterdir()) == before
     assert main(["report", str(sphere_file), str(after), "--distance-ply", str(distance), "--json", str(numbers)]) == 0
     assert distance.exists() and numbers.exists()
+
+
+def test_too_little_free_space_is_refused_before_any_work(sphere_file, tmp_path, capsys, monkeypatch):
+    """The outputs need room for the mesh (up to 4x its input file) and the report; a folder with less is refused
+    before anything is computed or written, naming the folder, what is free and what is needed."""
+    import collections
+    from filter_symblend.commands import files
+    usage = collections.namedtuple("usage", "total used free")
+    needed = 4 * sphere_file.stat().st_size + 2**20  # the mesh and the report
+    output, report = tmp_path / "out.ply", tmp_path / "out.json"
+    for free, status in ((needed - 1, 1), (needed, 0)):
+        monkeypatch.setattr(files.shutil, "disk_usage", lambda folder, free=free: usage(10 * needed, 0, free))
+        assert main(["symmetrize", str(sphere_file), "--pairs", "auto", "-o", str(output), "--report", str(report)]) \
+            == status
+        if status:
+            assert capsys.readouterr().err == (
+                f"symblend: error: {tmp_path}: {(needed - 1) / 1e6:.1f} MB free, and the outputs written there need "
+                f"about {needed / 1e6:.1f} MB (an output mesh up to 4x its input file); free some space, or write "
+                "the outputs to another disk.\n")
+            assert sorted(p.name for p in tmp_path.iterdir()) == ["sphere.obj"]
+    assert output.stat().st_size <= 4 * sphere_file.stat().st_size  # the estimate holds for this one
