@@ -10,7 +10,7 @@ import pytest
 from filter_symblend import synthetic
 from filter_symblend.commands.main import main
 from filter_symblend.landmarks.files import Landmark, LandmarkSet, write_landmarks
-from conftest import meshset_with_pairs
+from conftest import meshset_with_pairs, symmetric_blob, twins
 
 KEYS = ("p50", "p90", "p99", "rms", "max", "mean")
 
@@ -68,15 +68,54 @@ def test_symmetrize_and_report_give_the_same_figures_for_the_same_files(tmp_path
     assert kinds[0] == kinds[1] == {"cad": ["nothing to restore"]}.get(case, kinds[0])
 
 
-def test_an_input_already_symmetric_says_there_is_nothing_to_restore(tmp_path, capsys):
-    mesh, landmarks = _files(tmp_path, *torus())
-    output = tmp_path / "out.ply"
-    assert main(["symmetrize", str(mesh), "-l", str(landmarks), "-o", str(output), "--checks", "full"]) == 0
+def test_an_input_already_symmetric_comes_back_unchanged_and_says_so(tmp_path, capsys):
+    points, faces, left, right, _ = torus()
+    mesh, landmarks = _files(tmp_path, points, faces, left, right)
+    output, report = tmp_path / "out.ply", tmp_path / "out.json"
+    assert main(["symmetrize", str(mesh), "-l", str(landmarks), "-o", str(output), "--checks", "full",
+                 "--report", str(report)]) == 0
     err = capsys.readouterr().err
     assert "warning: nothing to restore: the input is already mirror-symmetric within " in err
-    assert "of its diagonal (99th percentile); the output equals the input within " in err
+    assert "of its diagonal (99th percentile); the output is the input, unchanged." in err
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(output))
+    ms.load_new_mesh(str(mesh))
+    np.testing.assert_array_equal(ms.mesh(0).vertex_matrix(), ms.mesh(1).vertex_matrix())  # bit for bit
+    written = json.loads(report.read_text())
+    assert written["nothing_to_restore"] is True and written["hausdorff_input_output"]["max"] == 0.0
+    assert written["mirror_asymmetry_after"] == written["mirror_asymmetry_before"]
     assert main(["report", str(mesh), str(output)]) == 0
     assert "warning: nothing to restore" in capsys.readouterr().err
+
+
+def _scan(amplitude: float, bend: float):
+    """A bumpy sphere with one mirror plane and 48 landmark pairs, each vertex moved at random by ``amplitude`` of
+    the diagonal (a scan's noise, which no smooth warp removes), then bent ``bend`` rad (which a warp removes)."""
+    points, faces = symmetric_blob(4)
+    left = np.flatnonzero(points[:, 0] > 0.1)[::25]
+    diagonal = np.linalg.norm(np.ptp(points, axis=0))
+    noisy = points + amplitude * diagonal * np.random.default_rng(3).normal(size=points.shape) / np.sqrt(3)
+    return meshset_with_pairs(synthetic.bend(noisy, bend) if bend else noisy, faces, left, twins(points)[left])
+
+
+def test_an_input_symmetric_within_a_scans_noise_comes_back_unchanged_unless_symmetrizing_helps(tmp_path):
+    from filter_symblend import save_filter_script
+    from filter_symblend.meshlab.mlx import read_filter_script
+    ms = _scan(2e-4, 0.0)
+    report = ms.generate_symmetrized_mesh()
+    save_filter_script(ms, tmp_path / "pipeline.mlx")  # the layer built again is still one call of the filter
+    assert [node.is_symblend for node in read_filter_script(tmp_path / "pipeline.mlx")] == [True]
+    before = report["mirror_asymmetry_before"]
+    assert 1e-4 < before["p99_relative"] < 1e-3 and report["symmetrized_asymmetry"]["p90"] > 0.95 * before["p90"]
+    assert report["nothing_to_restore"] is True
+    assert report["warnings"][0].startswith("nothing to restore: the input is already mirror-symmetric within ")
+    assert ", a scan's noise, and symmetrizing does not make it more so (90th percentile " in report["warnings"][0]
+    np.testing.assert_array_equal(ms.current_mesh().vertex_matrix(), ms.mesh(report["input_mesh_id"]).vertex_matrix())
+    bent = _scan(2e-4, 0.01)  # a small bend the warp does remove: the output is kept
+    report = bent.generate_symmetrized_mesh()
+    assert report["mirror_asymmetry_before"]["p99_relative"] < 1e-3
+    assert report["mirror_asymmetry_after"]["p90"] < 0.95 * report["mirror_asymmetry_before"]["p90"]
+    assert "nothing_to_restore" not in report and not report["warnings"]
 
 
 def _misplaced(cow, bend, distance):

@@ -8,11 +8,26 @@ from __future__ import annotations
 
 WORSE_MARGIN = 0.05  # the output's 90th percentile above the input's by more than this fraction: worse
 # An input whose 99th percentile of mirror asymmetry is below this fraction of its diagonal is symmetric
-# to the precision of its coordinates: single-precision CAD exports round at about 6e-8 of their size, and
-# scans are noisier than 1e-3 of theirs.
+# to the precision of its coordinates: single-precision CAD exports round at about 6e-8 of their size.
 ALREADY_SYMMETRIC = 1e-4
+# Below this (99th percentile, fraction of the diagonal) an input is symmetric within a scan's own noise:
+# structured-light and laser scanners measure to about 0.05-0.1 mm over 100 mm, 5e-4-1e-3 of the object.
+# Such an input that symmetrizing does not make more symmetric has nothing to restore either.
+SCAN_NOISE = 1e-3
 FAR_BEYOND = 3.0  # the mesh moved more than this many times the input's largest asymmetry
 SPARSE_PAIRS = 10  # landmark pairs below which dense automatic pairs are the fix for a worse result
+
+
+def nothing_to_restore(before: dict, after: dict, landmarks: dict | None = None) -> bool:
+    """Whether an input with mirror asymmetry ``before`` needs nothing: symmetric to the precision of its
+    coordinates, or within a scan's noise and no more symmetric after (``after``: the output's, 90th
+    percentile not below the input's by more than WORSE_MARGIN). With the landmark pairs' own asymmetry
+    (``landmarks``: ``max_relative``), they must be symmetric within a scan's noise too: pairs that say
+    otherwise define another symmetry than the surface's best plane (a shape may have several)."""
+    if landmarks is not None and landmarks["max_relative"] >= SCAN_NOISE:
+        return False
+    return before["p99_relative"] < ALREADY_SYMMETRIC or (
+        before["p99_relative"] < SCAN_NOISE and after["p90"] > (1 - WORSE_MARGIN) * before["p90"])
 
 
 def _percent(value: float) -> str:
@@ -20,18 +35,22 @@ def _percent(value: float) -> str:
 
 
 def result_warnings(before: dict, after: dict, hausdorff: dict | None = None, diagonal: float | None = None,
-                    landmark_pairs: int | None = None, automatic: bool = False) -> list[str]:
+                    landmark_pairs: int | None = None, automatic: bool = False, unchanged: bool = False) -> list[str]:
     """The warnings a symmetrization deserves. ``before``, ``after``: mirror asymmetry summaries
     (``p90``, ``p99``, ``max`` and ``*_relative``); ``hausdorff``: the two-way distance between the
     input and the output (``max``), mesh units, with the input's bounding-box ``diagonal``;
     ``landmark_pairs``: how many landmark pairs were used, ``automatic``: whether dense automatic
-    pairs were added (to name the fix)."""
+    pairs were added (to name the fix); ``unchanged``: the output is the input (the filter gives it
+    back when there is :func:`nothing_to_restore`)."""
     messages = []
-    if before["p99_relative"] < ALREADY_SYMMETRIC:
-        moved = "" if hausdorff is None or not diagonal else (
+    if unchanged or (landmark_pairs is None and nothing_to_restore(before, after)):
+        moved = "; the output is the input, unchanged" if unchanged else "" if hausdorff is None or not diagonal else (
             f"; the output equals the input within {_percent(hausdorff['max'] / diagonal)} of the diagonal")
+        within = "" if before["p99_relative"] < ALREADY_SYMMETRIC else (
+            f", a scan's noise, and symmetrizing does not make it more so (90th percentile "
+            f"{_percent(before['p90_relative'])} -> {_percent(after['p90_relative'])})")
         messages.append(f"nothing to restore: the input is already mirror-symmetric within "
-                        f"{_percent(before['p99_relative'])} of its diagonal (99th percentile){moved}.")
+                        f"{_percent(before['p99_relative'])} of its diagonal (99th percentile){within}{moved}.")
         return messages
     if after["p90"] > (1 + WORSE_MARGIN) * before["p90"]:
         if automatic and not landmark_pairs:

@@ -11,6 +11,7 @@ and the input is current again.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import inspect
 import warnings
@@ -22,7 +23,7 @@ import pymeshlab
 from . import recording
 from ..checks.hausdorff import two_way_distance
 from ..checks.surface_asymmetry import input_asymmetry, input_planes, output_asymmetry
-from ..checks.verdict import result_warnings
+from ..checks.verdict import nothing_to_restore, result_warnings
 from ..errors import MeshSetError, ParameterError, SymblendWarning
 from ..parameters import keyword_signature, parameters_doc, validate_parameters
 from ..pipeline import build_problem, solve_problem
@@ -169,6 +170,24 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExec
     return result, checks
 
 
+def _needs_nothing(checks: dict[str, Future], landmarks: dict | None) -> bool:
+    """Whether the (finished) checks and the landmark pairs' own asymmetry (``landmarks``, None without
+    landmark pairs) say there is nothing to restore (checks/verdict.nothing_to_restore)."""
+    if "mirror_asymmetry_before" not in checks:
+        return False
+    return nothing_to_restore(checks["mirror_asymmetry_before"].result(), checks["mirror_asymmetry_after"].result(),
+                              landmarks)
+
+
+def _the_input(result, points: np.ndarray, frame: str):
+    """``result`` with the input ``points`` (N, 3) as its output (in the canonical ``frame`` if asked) and no
+    asymmetry removed."""
+    if frame == "canonical":
+        transform = np.array(result.report["canonical_from_input"])
+        points = points @ transform[:3, :3].T + transform[:3, 3]
+    return dataclasses.replace(result, points=np.array(points, dtype=float), asymmetry=np.zeros(len(points)))
+
+
 def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict | None = None) -> dict:
     """``generate_symmetrized_mesh`` with an optional result ``cache`` (fingerprint -> result), so a
     script rehearsed on a copy of the MeshSet does not compute the same warp twice.
@@ -199,12 +218,24 @@ def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict |
             result, checks = _compute(mesh, options, progress, pool)
             with recording.recorded_call(ms, options):
                 output_id = _add_output_layer(ms, input_id, result, carried, list(checks.values()))
+                unchanged = _needs_nothing(checks, result.report.get("landmark_asymmetry_before"))
+                if unchanged:  # rare: the layer is built again from the input rather than wait for the checks
+                    result = _the_input(result, ms.mesh(input_id).vertex_matrix(), options["output_frame"])
+                    ms.set_current_mesh(output_id)
+                    ms.delete_current_mesh()
+                    output_id = _add_output_layer(ms, input_id, result, carried)
         result.report.update({name: check.result() for name, check in checks.items()})
         if "mirror_asymmetry_after" in result.report:
-            result.report["warnings"] = result_warnings(
-                result.report["mirror_asymmetry_before"], result.report["mirror_asymmetry_after"],
-                result.report.get("hausdorff_input_output"), result.report["diagonal"],
-                result.report["pair_count"], options["pairs"] != "landmarks")
+            report = result.report
+            report["warnings"] = result_warnings(
+                report["mirror_asymmetry_before"], report["mirror_asymmetry_after"],
+                report.get("hausdorff_input_output"), report["diagonal"], report["pair_count"],
+                options["pairs"] != "landmarks", unchanged)
+            if unchanged:  # the figures of the output given: the input's
+                report.update(nothing_to_restore=True, symmetrized_asymmetry=report["mirror_asymmetry_after"],
+                              mirror_asymmetry_after=report["mirror_asymmetry_before"])
+                if "hausdorff_input_output" in report:
+                    report["hausdorff_input_output"] = dict.fromkeys(report["hausdorff_input_output"], 0.0)
         if cache is not None:
             cache[key] = result
     return {**result.report, "input_mesh_id": input_id, "output_mesh_id": output_id}
