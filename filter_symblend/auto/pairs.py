@@ -210,14 +210,17 @@ def as_landmarks(points: np.ndarray, pairs: AutomaticPairs, user: CheckedLandmar
 
 
 def _distinct(points, left, right, midline, user, coincident):
-    """The pairs and midline points whose positions differ from every other landmark's (``coincident`` x
-    the landmarks' diagonal apart)."""
+    """The pairs and midline points whose positions no landmark before them holds (``coincident`` x the
+    landmarks' diagonal apart), the user's landmarks first: of two pairs whose twins fall on one point (a
+    point cloud's vertex), the first is kept."""
     fixed = np.zeros(0, dtype=np.int64) if user is None else np.concatenate([user.left, user.right, user.midline])
-    used = np.concatenate([left, right, midline, fixed])
+    used = np.concatenate([fixed, left, right, midline])
     scale = coincident * float(np.linalg.norm(np.ptp(points[used], axis=0)) or 1.0)
     cells = np.round(points[used] / scale).astype(np.int64)
-    _, inverse, counts = np.unique(cells, axis=0, return_inverse=True, return_counts=True)
-    shared = counts[inverse.ravel()] > 1
+    _, first = np.unique(cells, axis=0, return_index=True)
+    alone = np.zeros(len(used), dtype=bool)
+    alone[first] = True  # the first landmark at its position
+    alone = alone[len(fixed):]
     n = len(left)
-    keep = ~shared[:n] & ~shared[n:2 * n]
-    return left[keep], right[keep], midline[~shared[2 * n:2 * n + len(midline)]]
+    pair_kept = alone[:n] & alone[n:2 * n]
+    return left[pair_kept], right[pair_kept], midline[alone[2 * n:]]
