@@ -13,6 +13,7 @@ from filter_symblend.commands.batch import read_manifest, run
 from filter_symblend.commands.main import main
 from filter_symblend.core.landmark_asymmetry import fit_mirror_plane
 from filter_symblend.landmarks.files import Landmark, LandmarkSet, read_landmarks, write_landmarks
+from conftest import SAMPLE_MESHES
 
 BENDS = {"cow_a": 0.2, "cow_b": 0.4, "cow_c": 0.6}
 
@@ -233,3 +234,34 @@ def test_the_summary_gives_the_confident_share_of_automatic_pairs(study, tmp_pat
     assert float(auto["confident_share"]) == pytest.approx(report["auto_pairs"]["mirror_map"]["confident_share"],
                                                            rel=1e-3)
     assert 0.9 < float(auto["confident_share"]) <= 1.0 and landmarks["confident_share"] == ""
+
+
+def test_sigterm_stops_a_study_at_once_keeps_the_finished_specimens_and_the_next_run_finishes_it(tmp_path):
+    """A cluster's time limit sends SIGTERM: the running specimen stops, leaving no partial file, the ones not
+    started are not run, the folder is unlocked, the finished ones are whole; the same command finishes the rest."""
+    import signal
+    import subprocess
+    import sys
+    import time
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(SAMPLE_MESHES / "cow.obj"))
+    ms.meshing_surface_subdivision_midpoint(iterations=1)  # about 3 s a specimen with automatic pairs
+    for name in ("cow_1", "cow_2", "cow_3"):
+        ms.save_current_mesh(str(tmp_path / f"{name}.ply"))
+    (tmp_path / "study.csv").write_text("mesh,pairs\ncow_1.ply,auto\ncow_2.ply,auto\ncow_3.ply,auto\n")
+    outdir = tmp_path / "out"
+    command = [sys.executable, "-m", "filter_symblend.commands", "batch", str(tmp_path / "study.csv"), "-o",
+               str(outdir), "--workers", "1"]
+    run = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 240
+    while not (outdir / "cow_1.json").exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    run.send_signal(signal.SIGTERM)
+    _, err = run.communicate(timeout=60)
+    assert run.returncode == 143, err
+    assert err.endswith(f"symblend: terminated; the specimens finished are in {outdir}, each whole, the others not "
+                        "written (no partial file); the same command again finishes the rest\n")
+    assert sorted(p.name for p in outdir.iterdir()) == ["cow_1.json", "cow_1.ply"]  # no partial file, no lock
+    assert np.isfinite(_points(outdir / "cow_1.ply")).all()
+    done = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0 and "3 of 3 specimens symmetrized, 1 of them done before" in done.stdout

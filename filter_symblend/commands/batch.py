@@ -11,7 +11,6 @@ held to one thread; a failing row is reported and the others complete.
 from __future__ import annotations
 
 import argparse
-from concurrent.futures import ProcessPoolExecutor, as_completed
 import csv
 import dataclasses
 import io
@@ -19,6 +18,7 @@ import json
 import multiprocessing
 import os
 import pathlib
+import signal
 import sys
 import time
 import warnings
@@ -43,6 +43,7 @@ SUMMARY_FIELDS = ("mesh", "status", "seconds", *ASYMMETRY_FIELDS, "confident_sha
 PATH_COLUMNS = ("mesh", "landmarks", "pair_table")
 OUTPUT_OPTIONS = ("output", "report", "overwrite", "help", "save_pair_table")  # set by the batch, not by a row
 SCHEDULER_TIMEOUT = 30  # seconds to wait for a Dask scheduler to answer
+EXIT_TERMINATED = 143  # a worker stopped by SIGTERM, as the command itself exits
 TRUE_WORDS = {"1", "true", "yes", "y", "x"}
 FALSE_WORDS = {"", "0", "false", "no", "n"}
 
@@ -67,7 +68,9 @@ def register(commands) -> None:
                          save_pair_table=False)
     add_missing_option(batch)
     add_filter_options(batch)
-    batch.set_defaults(handler=run_command, parser=batch)
+    batch.set_defaults(handler=run_command, parser=batch, stopped_leaves=lambda args: (
+        f"the specimens finished are in {args.output}, each whole, the others not written (no partial file); the "
+        "same command again finishes the rest"))
 
 
 def run_command(args) -> int:
@@ -211,14 +214,47 @@ def _done_before(row: Row) -> dict:
             **_from_report(report, ms.current_mesh().vertex_matrix())}
 
 
+class _Stopped(BaseException):
+    """SIGTERM in a worker while it runs a row: the row's partial outputs are removed on the way out."""
+
+
+_RUNNING = False  # in a worker: whether a row is running (SIGTERM then unwinds it, else the worker just exits)
+
+
+def _stop_worker(signum, frame) -> None:
+    if _RUNNING:
+        raise _Stopped()
+    os._exit(EXIT_TERMINATED)
+
+
+def _start_worker() -> None:
+    """A worker stops on SIGTERM (the batch stopped) and leaves Ctrl-C in the terminal to the batch."""
+    signal.signal(signal.SIGTERM, _stop_worker)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _row_and_summary(row: Row) -> tuple[Row, dict]:
+    global _RUNNING
+    _RUNNING = True
+    try:
+        return row, run_row(row)
+    except _Stopped:
+        os._exit(EXIT_TERMINATED)  # its outputs' temporary files are gone; the batch reports the stop
+
+
 def _local(rows: list[Row], workers: int):
     """(row, summary) as each row completes, on a local pool of ``workers`` processes (each row holds BLAS
-    to one thread, :func:`run_row`)."""
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        futures = {pool.submit(run_row, row): row for row in rows}
-        for future in as_completed(futures):
-            yield futures[future], future.result()
+    to one thread, :func:`run_row`). When the batch stops (SIGTERM, Ctrl-C, an error), the workers stop
+    their rows at once, leaving no partial file, and the rows not started are not run."""
+    pool = multiprocessing.get_context("spawn").Pool(workers, initializer=_start_worker)
+    try:
+        yield from pool.imap_unordered(_row_and_summary, rows)
+        pool.close()
+    except BaseException:
+        pool.terminate()
+        raise
+    finally:
+        pool.join()
 
 
 def _dask(rows: list[Row], scheduler: str):

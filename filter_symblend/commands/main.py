@@ -50,8 +50,10 @@ def main(argv=None) -> int:
             stream.reconfigure(errors="backslashreplace")
     in_main_thread = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _terminate) if in_main_thread else None
+    left = "no output written"  # what a stopped command leaves: its outputs are one transaction
     try:
         args = build_parser().parse_args(argv)
+        left = getattr(args, "stopped_leaves", lambda _: left)(args)
         with warnings.catch_warnings():
             # numpy/scipy warnings are expected where results are checked (the core raises on any
             # non-finite output); ours name a cause and a fix.
@@ -66,10 +68,10 @@ def main(argv=None) -> int:
         print(f"symblend: error: {error.filename}: {error.strerror}", file=sys.stderr)
         return 1
     except Terminated:
-        print("symblend: terminated; no output written", file=sys.stderr)
+        print(f"symblend: terminated; {left}", file=sys.stderr)
         return 143
     except KeyboardInterrupt:
-        print("symblend: interrupted; no output written", file=sys.stderr)
+        print(f"symblend: interrupted; {left}", file=sys.stderr)
         return 130
     finally:
         if in_main_thread:
