@@ -39,13 +39,16 @@ def result_warnings(before: dict, after: dict, hausdorff: dict | None = None, di
     """The warnings a symmetrization deserves. ``before``, ``after``: mirror asymmetry summaries
     (``p90``, ``p99``, ``max`` and ``*_relative``); ``hausdorff``: the two-way distance between the
     input and the output (``max``), mesh units, with the input's bounding-box ``diagonal``;
-    ``landmark_pairs``: how many landmark pairs were used, ``automatic``: whether dense automatic
-    pairs were added (to name the fix); ``unchanged``: the output is the input (the filter gives it
-    back when there is :func:`nothing_to_restore`)."""
+    ``landmark_pairs``: how many landmark pairs were used (None: two files compared, ``symblend report``,
+    which decides :func:`nothing_to_restore` here), ``automatic``: whether dense automatic pairs were added
+    (to name the fix); ``unchanged``: the filter found nothing to restore and gave the input back."""
     messages = []
     if unchanged or (landmark_pairs is None and nothing_to_restore(before, after)):
-        moved = "; the output is the input, unchanged" if unchanged else "" if hausdorff is None or not diagonal else (
-            f"; the output equals the input within {_percent(hausdorff['max'] / diagonal)} of the diagonal")
+        moved = ""
+        if unchanged:
+            moved = "; the output is the input, unchanged"
+        elif hausdorff is not None and diagonal:
+            moved = f"; the output equals the input within {_percent(hausdorff['max'] / diagonal)} of the diagonal"
         within = "" if before["p99_relative"] < ALREADY_SYMMETRIC else (
             f", a scan's noise, and symmetrizing does not make it more so (90th percentile "
             f"{_percent(before['p90_relative'])} -> {_percent(after['p90_relative'])})")

@@ -1,12 +1,12 @@
 """How sure is a restoration: each landmark pair, and each midline landmark, left out in turn (the jackknife).
 
-For each left-out unit j, Steps 1 and 2 are solved again without it (:func:`.symmetrize.landmark_targets`,
-at the full solve's widths: only the data vary), the other landmarks' new targets are fitted rigidly onto the full solve's (a rigid motion of the whole is
-not a change of shape), and the left-out landmarks take the value the spline through the others gives
-them. The whole warp then needs no new solve: a thin-plate spline through values that are themselves a
-thin-plate spline of fewer centres is that spline, so the result without j is the full spline's warp
-plus the spline of the target changes ``delta_j`` at the same centres, and one spline with all the
-``delta_j`` as columns gives every vertex's change for every j in one evaluation.
+For each left-out unit j, Steps 1 and 2 are solved again without it (:func:`.symmetrize.landmark_targets`, at
+the full solve's widths: only the data vary), the other landmarks' new targets are fitted rigidly onto the full
+solve's (a rigid motion of the whole is not a change of shape), and the left-out landmarks take the value the
+spline through the others gives them. The whole warp then needs no new solve: a thin-plate spline through
+values that are themselves a thin-plate spline of fewer centres is that spline, so the result without j is
+the full spline's warp plus the spline of the target changes ``delta_j`` at the same centres, and one spline
+with all the ``delta_j`` as columns gives every vertex's change for every j in one evaluation.
 
 Per vertex, the jackknife standard error of its restored position (mesh units),
 ``sqrt((J - 1) / J * sum_j |d_j(x) - mean_j d_j(x)|^2)``; per unit, its influence: the largest
@@ -34,8 +34,8 @@ EVALUATED_VALUES = 2**24  # vertices x columns per evaluation of the changes (12
 @dataclasses.dataclass(frozen=True)
 class Uncertainty:
     """``per_vertex`` (N,): jackknife standard error of each restored vertex, mesh units; ``influence``
-    (J,): the largest distance a vertex moves when unit j is left out, mesh units; ``units`` (J,): their
-    labels (pair ids, ``midline k``); ``kept_in``: units that cannot be left out, with why."""
+    (J,): the largest distance a vertex moves when unit j is left out, mesh units; ``units`` (J >= 2,):
+    their labels (pair ids, ``midline k``); ``kept_in``: units that cannot be left out, with why."""
 
     per_vertex: np.ndarray
     influence: np.ndarray
@@ -49,7 +49,7 @@ class Uncertainty:
         return {"method": "jackknife", "left_out": len(self.units), "median_relative": float(p50 / diagonal),
                 "p90_relative": float(p90 / diagonal), "max_relative": float(self.per_vertex.max() / diagonal),
                 "influence_relative": {unit: float(value / diagonal) for unit, value in zip(self.units, self.influence)},
-                "most_influential_pair": self.units[int(np.argmax(self.influence))] if self.units else None,
+                "most_influential_pair": self.units[int(np.argmax(self.influence))],
                 "kept_in": self.kept_in}
 
 
@@ -95,9 +95,10 @@ def jackknife(points: np.ndarray, landmarks: CheckedLandmarks, options: dict, fu
     count = len(changes)
     if count < 2:
         first, reason = next(iter(kept_in.items()))
+        unit = f"pair {first}" if first in labels[:len(landmarks.left)] else first
         raise GeometryError(f"The jackknife needs two landmark pairs or midline landmarks that can be left out, and "
-                            f"{count} can (without pair {first}: {reason}). Add landmarks, or leave `uncertainty` "
-                            "at 'none'.")
+                            f"{count} can (without {unit}: {reason}). Add landmarks, or leave `uncertainty` at "
+                            "'none'.")
     total, squares = np.zeros((len(points), 3)), np.zeros(len(points))
     influence = np.zeros(count)
     centres = points[full.vertices]
