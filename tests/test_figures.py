@@ -204,3 +204,21 @@ def test_the_picture_looks_along_the_mirror_plane_and_its_normal(tmp_path, cow, 
     long_axis = np.linalg.svd(in_plane, full_matrices=False)[2][0]
     assert abs(views["along the long axis"] @ long_axis) == pytest.approx(1.0, abs=1e-3)
     assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_a_body_of_revolution_is_said_to_have_several_mirror_planes():
+    """A cone with scan noise (1e-3 of its diagonal): every plane through its axis mirrors it about as well, and
+    the figures, measured against one of them, say so; the cow's distinct planes mirror it far worse than its own
+    (test_a_result_that_got_better_has_no_warning)."""
+    ms = pymeshlab.MeshSet()
+    ms.create_cone(r0=1, r1=0.6, h=2, subdiv=64)
+    points, faces = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+    mirror = np.argmin(np.linalg.norm(points[:, None] * [-1.0, 1.0, 1.0] - points[None], axis=2), axis=1)
+    left = np.flatnonzero(points[:, 0] > 0.2)[::8]
+    diagonal = np.linalg.norm(np.ptp(points, axis=0))
+    noisy = points + 1e-3 * diagonal * np.random.default_rng(5).normal(size=points.shape) / np.sqrt(3)
+    report = meshset_with_pairs(noisy, faces, left, mirror[left]).generate_symmetrized_mesh()
+    others = report["mirror_asymmetry_before"]["other_planes"]
+    assert len(others) >= 2 and all(abs(np.asarray(o["normal"]) @ [0.0, 1.0, 0.0]) < 1e-2 for o in others)  # through y
+    assert any(w.startswith(f"the input has {len(others)} other mirror plane(s) that mirror it nearly as well as the "
+                            "one measured") for w in report["warnings"])

@@ -12,7 +12,8 @@ from ..core.geometry import MirrorPlane, reflection_across_plane
 from ..core.landmark_asymmetry import MirrorFit
 from ..core.mesh_quantities import evenly
 from ..core.mirror_fill import distances_to_surface
-from ..core.mirror_planes import best_plane_from, fit_surface_mirror_plane, surface_mirror_planes
+from ..core.mirror_planes import SCREEN_SAMPLES, best_plane_from, fit_surface_mirror_plane, surface_mirror_planes
+from .verdict import SCAN_NOISE
 
 # Vertices, evenly strided, at which the filter's report measures mirror asymmetry: the mean and RMS of
 # 5,000 distances are within about 1.5 % of all of them, at a cost that does not grow with the mesh.
@@ -23,6 +24,10 @@ CHECK_SAMPLES = 5_000
 # Homer, the bunny, Woody and the bent cow (less than the 1.5 % the 5,000-vertex sample costs) and took
 # 5-40 % off finding and measuring the input's planes (1.15 -> 1.09 s on Igea, 0.87 -> 0.51 s on Homer).
 CHECK_CONVERGED = 1e-4
+# Another of the input's planes mirrors it "nearly as well" when its 90th percentile is within this fraction of
+# the measured plane's. Distinct planes of a shape with one mirror symmetry differ by far more (the cow's second
+# plane: several times the first's); those of a body of revolution agree to within their sampling.
+NEARLY = 0.1
 
 
 def distance_summary(distances: np.ndarray) -> dict[str, float]:
@@ -54,8 +59,29 @@ def input_planes(points: np.ndarray) -> list[MirrorPlane]:
 def input_asymmetry(points: np.ndarray, faces: np.ndarray, starts: list[MirrorPlane], diagonal: float,
                     samples: int | None = CHECK_SAMPLES) -> dict:
     """The ``before`` side of :func:`before_and_after`: against the best of its own ``starts``
-    (:func:`surface_mirror_planes` of ``points``), relative to ``diagonal``."""
-    return mirror_asymmetry(points, faces, plane=starts[0], samples=samples, diagonal=diagonal)
+    (:func:`surface_mirror_planes` of ``points``), relative to ``diagonal``; ``other_planes``: those of the
+    others that mirror the input nearly as well (:func:`nearly_as_good`)."""
+    measured = mirror_asymmetry(points, faces, plane=starts[0], samples=samples, diagonal=diagonal)
+    return {**measured, "other_planes": nearly_as_good(points, faces, starts, diagonal)}
+
+
+def nearly_as_good(points: np.ndarray, faces: np.ndarray, planes: list[MirrorPlane], diagonal: float) -> list[dict]:
+    """The ``planes`` after the first whose 90th percentile of mirror asymmetry, on SCREEN_SAMPLES evenly
+    strided vertices, is within NEARLY of the first's, or a scan's noise (SCAN_NOISE of the diagonal) above it,
+    when the first mirrors most of the input (median within a scan's noise; a strongly bent shape is mirrored
+    about as badly by several planes, which says nothing): a body of revolution or a box has several mirror planes,
+    and the one measured need not be the symmetry a run restores. Each as ``normal``, ``offset``,
+    ``p90_relative`` (to ``diagonal``), best first."""
+    queries = evenly(points, SCREEN_SAMPLES)
+    first = mirror_distances(points, faces, *planes[0], queries)
+    if np.median(first) >= SCAN_NOISE * diagonal:  # most of the input is not mirrored by any: no plane stands out
+        return []
+    p90 = [float(np.percentile(first, 90))] + [
+        float(np.percentile(mirror_distances(points, faces, normal, offset, queries), 90)) for normal, offset in planes[1:]]
+    close = [{"normal": np.asarray(normal, dtype=float).tolist(), "offset": float(offset), "p90_relative": value / diagonal}
+             for (normal, offset), value in zip(planes[1:], p90[1:])
+             if value <= (1.0 + NEARLY) * p90[0] + SCAN_NOISE * diagonal]
+    return sorted(close, key=lambda plane: plane["p90_relative"])
 
 
 def output_asymmetry(points: np.ndarray, faces: np.ndarray, starts: list[MirrorPlane], diagonal: float,

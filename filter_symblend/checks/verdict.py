@@ -68,6 +68,13 @@ def result_warnings(before: dict, after: dict, hausdorff: dict | None = None, di
         messages.append(f"the output is more asymmetric than the input: 90th percentile "
                         f"{_percent(before['p90_relative'])} -> {_percent(after['p90_relative'])} of the diagonal; "
                         f"{fix}.")
+    others = before.get("other_planes", [])
+    if others:
+        messages.append(f"the input has {len(others)} other mirror plane(s) that mirror it nearly as well as the one "
+                        f"measured (90th percentile {_percent(others[0]['p90_relative'])} against "
+                        f"{_percent(before['p90_relative'])} of the diagonal): a body of revolution or a box has "
+                        "several, and the before/after figures use the best, which need not be the symmetry the "
+                        "pairs restored; look at the picture (symblend report --png).")
     if hausdorff is not None and hausdorff["max"] > FAR_BEYOND * before["max"]:
         messages.append(f"the mesh moved up to {hausdorff['max']:.4g} (two-way Hausdorff), {hausdorff['max'] / before['max']:.1f}x "
                         f"the input's largest mirror asymmetry ({before['max']:.4g}): more than symmetrizing needs; "
