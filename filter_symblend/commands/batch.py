@@ -240,6 +240,8 @@ def _row_and_summary(row: Row) -> tuple[Row, dict]:
         return row, run_row(row)
     except _Stopped:
         os._exit(EXIT_TERMINATED)  # its outputs' temporary files are gone; the batch reports the stop
+    finally:
+        _RUNNING = False
 
 
 def _local(rows: list[Row], workers: int):
