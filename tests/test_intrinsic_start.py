@@ -92,6 +92,8 @@ def test_a_shape_without_mirror_symmetry_gives_no_start_and_says_why():
         "The shape's intrinsic mirror could not be computed (a point cloud, or no spectrum).")
     unsolved = {"starts": {8: {"descriptor_disagreement": 0.01, "pairs": 300, "refused": "pairs fall apart"}}}
     assert cannot_start(unsolved) == "Its intrinsic mirror's pairs could not be solved (pairs fall apart)."
+    too_few = {"starts": {8: {"descriptor_disagreement": 0.01, "pairs": 2}}}
+    assert cannot_start(too_few) == "Its intrinsic mirror's pairs could not be solved (too few pairs apart)."
 
 
 def test_a_run_started_by_the_intrinsic_mirror_says_so_and_other_modes_refuse(cow):

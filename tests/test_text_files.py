@@ -119,3 +119,6 @@ def test_a_manifest_from_a_spreadsheet_reads_with_any_line_ends(tmp_path, line_e
     first, second = read_manifest(tmp_path / "m.csv", tmp_path / "out")
     assert first.mesh.name == "skull 1.ply" and str(tmp_path / "skull 1.pp") in first.arguments
     assert second.mesh.name == "skull, 2.ply" and second.arguments[1:3] == ("--mode", "standard")
+    (tmp_path / "m.csv").write_bytes(b"PK\x03\x04\x00\x00")  # a spreadsheet saved as .xlsx, renamed
+    with pytest.raises(LandmarkFileError, match=r"m.csv: not a text file; a manifest is a CSV table with a header row"):
+        read_manifest(tmp_path / "m.csv", tmp_path / "out")

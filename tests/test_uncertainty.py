@@ -56,6 +56,19 @@ def test_the_jackknife_equals_the_slow_one_restoration_by_restoration(cow, mode)
     assert spread.max() > 1e-4 * diagonal  # a bent, compressed cow from 16 pairs is not known exactly
 
 
+def test_the_jackknife_of_a_flat_drawing_equals_the_slow_one_and_stays_in_its_plane():
+    """A flat shape (the paper's WoodDoll kind) is warped in its plane: the changes go through the plane's spline."""
+    angle = np.linspace(0, 2 * np.pi, 80, endpoint=False)
+    points, _ = synthetic.flat_region(np.c_[np.cos(angle) * (1 + 0.3 * np.cos(2 * angle)), 0.7 * np.sin(angle)], rings=8)
+    twin = np.argmin(np.linalg.norm(points[:, None] - points[None] * [-1, 1, 1], axis=2), axis=1)
+    bent = points + np.c_[0.15 * points[:, 1] ** 2, np.zeros((len(points), 2))]
+    left = np.flatnonzero(points[:, 0] > 0.05)[::6]
+    result = symmetrize(bent, left, twin[left], uncertainty="jackknife")
+    spread, _ = _slow_jackknife(bent, left, twin[left], "standard")
+    np.testing.assert_allclose(result.uncertainty, spread, atol=1e-7 * result.report["diagonal"])
+    assert spread.max() > 0
+
+
 def test_the_same_restoration_with_and_without_uncertainty(cow):
     points = synthetic.bend(cow.points, 0.4)
     left, right = cow.landmarks(20)

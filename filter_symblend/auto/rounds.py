@@ -146,9 +146,9 @@ def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, l
             if core["mode"] != "articulated":  # the intrinsic mirror holds under isometries: a pose, not a compression
                 raise _refusal_saying(refusal, "If it is a posed body, mode='articulated' pairs it by its intrinsic "
                                                "mirror.") from None
-            result, report["intrinsic_start"] = _intrinsic_first_output(points, surface, core, scored, config,
-                                                                         refusal, progress)
-            best = surface_asymmetry(surface, result, scored)
+            result, tried = _intrinsic_first_output(points, surface, core, scored, config, refusal, progress)
+            report["intrinsic_start"] = tried
+            best = tried["starts"][tried["chosen"]]["surface_asymmetry"]  # measured there, as below
             report["rounds"] = [{"intrinsic_start": True, "surface_asymmetry": best}]
             report["warnings"] = [INTRINSIC_START_WARNING]
             mirror = _output_map(surface, result, registration, config)
