@@ -1,7 +1,8 @@
-"""Mirror asymmetry of a whole surface: how far it is from its reflection across its best mirror plane
-(core/mirror_planes). The asymmetry of a vertex is its distance to the reflected surface; by the
-reflection's symmetry the two directions of the Hausdorff distance are equal, so one direction, sampled
-at the vertices, is the two-way value.
+"""Mirror asymmetry of a whole surface: how far it is from its reflection across a mirror plane, the plane
+of the pairs a run solved refined to the surface, or without pairs the surface's best (core/mirror_planes).
+The asymmetry of a vertex is its distance to the reflected surface; by the reflection's symmetry the two
+directions of the Hausdorff distance are equal, so one direction, sampled at the vertices, is the two-way
+value.
 """
 
 from __future__ import annotations
@@ -9,11 +10,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.geometry import MirrorPlane, reflection_across_plane
-from ..core.landmark_asymmetry import MirrorFit
+from ..core.landmark_asymmetry import MirrorFit, fit_mirror_plane
 from ..core.mesh_quantities import evenly
 from ..core.mirror_fill import distances_to_surface
-from ..core.mirror_planes import SCREEN_SAMPLES, best_plane_from, fit_surface_mirror_plane, surface_mirror_planes
-from .verdict import SCAN_NOISE
+from ..core.mirror_planes import (DISTINCT, SCREEN_SAMPLES, best_plane_from, fit_surface_mirror_plane,
+                                  surface_mirror_planes)
+from .verdict import SCAN_NOISE, SOLVED
 
 # Vertices, evenly strided, at which the filter's report measures mirror asymmetry: the mean and RMS of
 # 5,000 distances are within about 1.5 % of all of them, at a cost that does not grow with the mesh.
@@ -28,6 +30,10 @@ CHECK_CONVERGED = 1e-4
 # the measured plane's. Distinct planes of a shape with one mirror symmetry differ by far more (the cow's second
 # plane: several times the first's); those of a body of revolution agree to within their sampling.
 NEARLY = 0.1
+# Fewer solved pairs than this do not fix a plane (three points in general position do); the figures then use
+# the surface's best plane.
+PLANE_PAIRS = 3
+BEST = "the input's best plane"  # a measured plane's ``plane_from`` without solved pairs (verdict.SOLVED with)
 
 
 def distance_summary(distances: np.ndarray) -> dict[str, float]:
@@ -37,17 +43,30 @@ def distance_summary(distances: np.ndarray) -> dict[str, float]:
             "rms": float(np.sqrt(np.mean(distances**2))), "p50": float(p50), "p90": float(p90), "p99": float(p99)}
 
 
+def pairs_plane(first: np.ndarray, second: np.ndarray) -> MirrorPlane | None:
+    """The mirror plane of the pairs (first[k], second[k]), each (k, 3), fitted as Step 2 of the method fits
+    the landmarks' (core/landmark_asymmetry); None with fewer than PLANE_PAIRS pairs or any not finite."""
+    first, second = np.asarray(first, dtype=float), np.asarray(second, dtype=float)
+    if len(first) < PLANE_PAIRS or not (np.isfinite(first).all() and np.isfinite(second).all()):
+        return None
+    fit = fit_mirror_plane(first, second)
+    return MirrorPlane(fit.normal, float(fit.offset))
+
+
 def before_and_after(before: tuple[np.ndarray, np.ndarray], after: tuple[np.ndarray, np.ndarray],
-                     samples: int | None = CHECK_SAMPLES) -> tuple[dict, dict]:
-    """The mirror asymmetry (:func:`mirror_asymmetry`) of two surfaces ``(points (N, 3), faces (F, 3))``,
-    each against its own best plane fitted by one rule: the distinct planes :func:`surface_mirror_planes`
-    finds on ``before``, the best of them for ``before``, and for ``after`` the best it reaches from
-    them (:func:`best_plane_from`). The filter's checks, ``symblend symmetrize`` and ``symblend report``
-    all measure this way, so the same two surfaces give the same figures; both relative to
-    ``before``'s bounding-box diagonal."""
+                     samples: int | None = CHECK_SAMPLES,
+                     solved: tuple[MirrorPlane | None, MirrorPlane | None] = (None, None)) -> tuple[dict, dict]:
+    """The mirror asymmetry (:func:`mirror_asymmetry`) of two surfaces ``(points (N, 3), faces (F, 3))`` by
+    one rule: each against the plane of the solved pairs on it (``solved``: :func:`pairs_plane` on
+    ``before`` and on ``after``) refined to the surface by reflection ICP; without them, the best of the
+    distinct planes :func:`surface_mirror_planes` finds on ``before``, and for ``after`` the best it
+    reaches from them (:func:`best_plane_from`). The filter's checks, ``symblend symmetrize`` and
+    ``symblend report`` all measure this way, so the same two surfaces and pairs give the same figures;
+    both relative to ``before``'s bounding-box diagonal."""
     starts = input_planes(before[0])
     diagonal = float(np.linalg.norm(np.ptp(before[0], axis=0)))
-    return (input_asymmetry(*before, starts, diagonal, samples), output_asymmetry(*after, starts, diagonal, samples))
+    return (input_asymmetry(*before, starts, diagonal, samples, solved[0]),
+            output_asymmetry(*after, starts, diagonal, samples, solved[1]))
 
 
 def input_planes(points: np.ndarray) -> list[MirrorPlane]:
@@ -57,39 +76,48 @@ def input_planes(points: np.ndarray) -> list[MirrorPlane]:
 
 
 def input_asymmetry(points: np.ndarray, faces: np.ndarray, starts: list[MirrorPlane], diagonal: float,
-                    samples: int | None = CHECK_SAMPLES) -> dict:
-    """The ``before`` side of :func:`before_and_after`: against the best of its own ``starts``
-    (:func:`surface_mirror_planes` of ``points``), relative to ``diagonal``; ``other_planes``: those of the
-    others that mirror the input nearly as well (:func:`nearly_as_good`)."""
-    measured = mirror_asymmetry(points, faces, plane=starts[0], samples=samples, diagonal=diagonal)
-    return {**measured, "other_planes": nearly_as_good(points, faces, starts, diagonal)}
+                    samples: int | None = CHECK_SAMPLES, solved: MirrorPlane | None = None) -> dict:
+    """The ``before`` side of :func:`before_and_after`: against the ``solved`` pairs' plane refined, or
+    without it the best of its own ``starts`` (:func:`surface_mirror_planes` of ``points``), relative to
+    ``diagonal``; ``plane_from`` says which (SOLVED or BEST); ``other_planes``: those of the ``starts``
+    that mirror the input nearly as well (:func:`nearly_as_good`)."""
+    plane = starts[0] if solved is None else best_plane_from(points, [solved], CHECK_CONVERGED)
+    measured = mirror_asymmetry(points, faces, plane=plane, samples=samples, diagonal=diagonal)
+    return {**measured, "plane_from": BEST if solved is None else SOLVED,
+            "other_planes": nearly_as_good(points, faces, plane, starts, diagonal)}
 
 
-def nearly_as_good(points: np.ndarray, faces: np.ndarray, planes: list[MirrorPlane], diagonal: float) -> list[dict]:
-    """The ``planes`` after the first whose 90th percentile of mirror asymmetry, on SCREEN_SAMPLES evenly
-    strided vertices, is within NEARLY of the first's, or a scan's noise (SCAN_NOISE of the diagonal) above it,
-    when the first mirrors most of the input (median within a scan's noise; a strongly bent shape is mirrored
-    about as badly by several planes, which says nothing): a body of revolution or a box has several mirror planes,
-    and the one measured need not be the symmetry a run restores. Each as ``normal``, ``offset``,
-    ``p90_relative`` (to ``diagonal``), best first."""
+def nearly_as_good(points: np.ndarray, faces: np.ndarray, measured: MirrorPlane, planes: list[MirrorPlane],
+                   diagonal: float) -> list[dict]:
+    """The ``planes`` other than the ``measured`` one (normals more than DISTINCT apart) that mirror most of
+    the input (median mirror asymmetry within a scan's noise, SCAN_NOISE of the diagonal) and whose 90th
+    percentile is within NEARLY of the measured plane's, or a scan's noise above it, or below it; on
+    SCREEN_SAMPLES evenly strided vertices. A body of revolution or a box has several mirror planes, and the
+    one measured need not be the only symmetry; a strongly bent shape, mirrored about as badly by several
+    planes, has none to name. Each as ``normal``, ``offset``, ``p90_relative`` (to ``diagonal``), best first."""
     queries = evenly(points, SCREEN_SAMPLES)
-    first = mirror_distances(points, faces, *planes[0], queries)
-    if np.median(first) >= SCAN_NOISE * diagonal:  # most of the input is not mirrored by any: no plane stands out
+    normal = np.asarray(measured[0], dtype=float)
+    others = [plane for plane in planes if abs(np.asarray(plane[0], dtype=float) @ normal) < np.cos(DISTINCT)]
+    if not others:
         return []
-    p90 = [float(np.percentile(first, 90))] + [
-        float(np.percentile(mirror_distances(points, faces, normal, offset, queries), 90)) for normal, offset in planes[1:]]
-    close = [{"normal": np.asarray(normal, dtype=float).tolist(), "offset": float(offset), "p90_relative": value / diagonal}
-             for (normal, offset), value in zip(planes[1:], p90[1:])
-             if value <= (1.0 + NEARLY) * p90[0] + SCAN_NOISE * diagonal]
+    bound = (1.0 + NEARLY) * np.percentile(mirror_distances(points, faces, *measured, queries), 90) + SCAN_NOISE * diagonal
+    close = []
+    for other_normal, offset in others:
+        p50, p90 = np.percentile(mirror_distances(points, faces, other_normal, offset, queries), [50, 90])
+        if p50 < SCAN_NOISE * diagonal and p90 <= bound:
+            close.append({"normal": np.asarray(other_normal, dtype=float).tolist(), "offset": float(offset),
+                          "p90_relative": float(p90) / diagonal})
     return sorted(close, key=lambda plane: plane["p90_relative"])
 
 
 def output_asymmetry(points: np.ndarray, faces: np.ndarray, starts: list[MirrorPlane], diagonal: float,
-                     samples: int | None = CHECK_SAMPLES) -> dict:
-    """The ``after`` side of :func:`before_and_after`: against the best plane reached from the input's
-    ``starts`` (:func:`best_plane_from`), relative to the input's ``diagonal``."""
-    plane = best_plane_from(points, starts, CHECK_CONVERGED)
-    return mirror_asymmetry(points, faces, plane=plane, samples=samples, diagonal=diagonal)
+                     samples: int | None = CHECK_SAMPLES, solved: MirrorPlane | None = None) -> dict:
+    """The ``after`` side of :func:`before_and_after`: against the ``solved`` pairs' plane on the output
+    refined, or without it the best plane reached from the input's ``starts`` (:func:`best_plane_from`),
+    relative to the input's ``diagonal``; ``plane_from`` says which."""
+    plane = best_plane_from(points, starts if solved is None else [solved], CHECK_CONVERGED)
+    measured = mirror_asymmetry(points, faces, plane=plane, samples=samples, diagonal=diagonal)
+    return {**measured, "plane_from": BEST if solved is None else SOLVED}
 
 
 def mirror_distances(points: np.ndarray, faces: np.ndarray, normal, offset: float,

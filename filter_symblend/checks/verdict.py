@@ -6,6 +6,8 @@ and stderr; the exit status stays 0.
 
 from __future__ import annotations
 
+SOLVED = "the solved pairs"  # a measured plane's ``plane_from`` when it is the solved pairs' (checks/surface_asymmetry)
+
 WORSE_MARGIN = 0.05  # the output's 90th percentile above the input's by more than this fraction: worse
 # An input whose 99th percentile of mirror asymmetry is below this fraction of its diagonal is symmetric
 # to the precision of its coordinates: single-precision CAD exports round at about 6e-8 of their size.
@@ -70,11 +72,14 @@ def result_warnings(before: dict, after: dict, hausdorff: dict | None = None, di
                         f"{fix}.")
     others = before.get("other_planes", [])
     if others:
-        messages.append(f"the input has {len(others)} other mirror plane(s) that mirror it nearly as well as the one "
-                        f"measured (90th percentile {_percent(others[0]['p90_relative'])} against "
+        used = ("the plane of the pairs solved: check in the picture (symblend report --png) that they are on the "
+                "symmetry you mean to restore" if before.get("plane_from") == SOLVED else
+                "the input's best, which need not be the symmetry the pairs restored; look at the picture (symblend "
+                "report --png)")
+        messages.append(f"the input has {len(others)} other mirror plane(s) that mirror most of it as well as the one "
+                        f"measured, or better (90th percentile {_percent(others[0]['p90_relative'])} against "
                         f"{_percent(before['p90_relative'])} of the diagonal): a body of revolution or a box has "
-                        "several, and the before/after figures use the best, which need not be the symmetry the "
-                        "pairs restored; look at the picture (symblend report --png).")
+                        f"several, and the before/after figures use {used}.")
     if hausdorff is not None and hausdorff["max"] > FAR_BEYOND * before["max"]:
         messages.append(f"the mesh moved up to {hausdorff['max']:.4g} (two-way Hausdorff), {hausdorff['max'] / before['max']:.1f}x "
                         f"the input's largest mirror asymmetry ({before['max']:.4g}): more than symmetrizing needs; "

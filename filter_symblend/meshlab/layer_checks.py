@@ -4,21 +4,67 @@ that chain it)."""
 
 from __future__ import annotations
 
+import numpy as np
 import pymeshlab
+from scipy.spatial import cKDTree
 
 from ..checks.hausdorff import two_way_distance
-from ..checks.surface_asymmetry import CHECK_SAMPLES, before_and_after
+from ..checks.surface_asymmetry import CHECK_SAMPLES, before_and_after, pairs_plane
+from ..core.landmark_pairs import pairs_from_attribute
+from ..errors import LandmarkError
+from ..parameters import DEFAULTS
+from .attributes import optional_attribute
+from .meshset_filter import TWIN_ATTRIBUTE
 
 
 def compare_layers(ms: pymeshlab.MeshSet, before: int, after: int, samples: int | None = CHECK_SAMPLES) -> dict:
     """``{"hausdorff_before_after", "mirror_asymmetry_before", "mirror_asymmetry_after"}`` for two
     layers of ``ms``; each mirror asymmetry is measured at ``samples`` evenly strided vertices (None:
-    all) and holds their distances as ``per_vertex``, each against its own plane fitted as the filter
-    fits it (:func:`before_and_after`). The layers are not changed."""
+    all) and holds their distances as ``per_vertex``, each against its plane fitted as the filter fits it
+    (:func:`before_and_after`), from the pairs the output carries (:func:`solved_planes`). The layers are
+    not changed."""
     meshes = [(ms.mesh(i).vertex_matrix(), ms.mesh(i).face_matrix()) for i in (before, after)]
     result = {"hausdorff_before_after": two_way_distance(*meshes[0], *meshes[1])}
-    result["mirror_asymmetry_before"], result["mirror_asymmetry_after"] = before_and_after(*meshes, samples)
+    result["mirror_asymmetry_before"], result["mirror_asymmetry_after"] = before_and_after(
+        *meshes, samples, solved_planes(ms.mesh(before), ms.mesh(after)))
     return result
+
+
+def solved_planes(before: pymeshlab.Mesh, after: pymeshlab.Mesh) -> tuple:
+    """The planes (checks/surface_asymmetry.pairs_plane) on ``before`` and on ``after`` of the pairs the
+    filter solved, as its output carries them: the automatic twins (TWIN_ATTRIBUTE, points of the output;
+    on the input, each twin's nearest output vertex), else the landmark pairs of the default pair attribute
+    on the output or the input (both sides weighted above 0). (None, None) without them, or when the two
+    meshes do not share their vertices (not a run's input and output)."""
+    if before.vertex_number() != after.vertex_number():
+        return None, None
+    points, moved = before.vertex_matrix(), after.vertex_matrix()
+    twins = _point_attribute(after, TWIN_ATTRIBUTE)
+    if twins is not None:
+        vertex = np.flatnonzero(np.isfinite(twins).all(axis=1))
+        twin_vertex = cKDTree(moved).query(twins[vertex])[1]
+        return pairs_plane(points[vertex], points[twin_vertex]), pairs_plane(moved[vertex], twins[vertex])
+    for mesh in (after, before):
+        labels = optional_attribute(mesh, DEFAULTS["pair_attribute"])
+        try:
+            pairs = None if labels is None else pairs_from_attribute(labels, DEFAULTS["pair_attribute"])
+        except LandmarkError:  # not the filter's pairs: the figures use the best plane, and say so
+            pairs = None
+        if pairs is not None:
+            weights = optional_attribute(mesh, DEFAULTS["weight_attribute"])
+            both = np.ones(len(pairs.left), dtype=bool) if weights is None else (
+                (weights[pairs.left] > 0) & (weights[pairs.right] > 0))
+            left, right = pairs.left[both], pairs.right[both]
+            return pairs_plane(points[left], points[right]), pairs_plane(moved[left], moved[right])
+    return None, None
+
+
+def _point_attribute(mesh: pymeshlab.Mesh, name: str) -> np.ndarray | None:
+    """The per-vertex custom point attribute ``name`` (N, 3), or None when the mesh has none."""
+    try:
+        return mesh.vertex_custom_point_attribute_matrix(name)
+    except pymeshlab.PyMeshLabException:
+        return None
 
 
 def two_way_hausdorff(ms: pymeshlab.MeshSet, a: int, b: int) -> dict[str, float]:

@@ -22,7 +22,7 @@ import pymeshlab
 
 from . import recording
 from ..checks.hausdorff import two_way_distance
-from ..checks.surface_asymmetry import input_asymmetry, input_planes, output_asymmetry
+from ..checks.surface_asymmetry import input_asymmetry, input_planes, output_asymmetry, pairs_plane
 from ..checks.verdict import nothing_to_restore, result_warnings
 from ..errors import MeshSetError, ParameterError, SymblendWarning
 from ..parameters import keyword_signature, parameters_doc, validate_parameters
@@ -131,12 +131,23 @@ def _fingerprint(mesh: pymeshlab.Mesh, options: dict) -> str:
     return digest.hexdigest()
 
 
-def _mirror_check(side, points: np.ndarray, faces: np.ndarray, starts, diagonal: float) -> dict:
+def _mirror_check(side, points: np.ndarray, faces: np.ndarray, starts, diagonal: float, solved) -> dict:
     """Mirror asymmetry of the surface (points (N, 3), faces) by ``side`` (input_asymmetry or
-    output_asymmetry: one rule for both) from the planes ``starts`` (a future of the input's distinct
-    planes), relative to the input's ``diagonal``, without per-vertex values."""
-    measured = side(points, faces, starts.result(), diagonal)
+    output_asymmetry: one rule for both) against the ``solved`` pairs' plane on it refined (None: from the
+    planes ``starts``, a future of the input's distinct planes), relative to the input's ``diagonal``,
+    without per-vertex values."""
+    measured = side(points, faces, starts.result(), diagonal, solved=solved)
     return {k: v for k, v in measured.items() if k != "per_vertex"}
+
+
+def _solved_plane(points: np.ndarray, landmarks, mirror_pairs):
+    """The plane (checks/surface_asymmetry.pairs_plane) on ``points`` (N, 3), the input's or the output's,
+    of the pairs solved: every automatic twin of ``mirror_pairs`` when there are some, else the checked
+    ``landmarks``' pairs with both sides given (weight > 0); None when they do not fix one."""
+    if mirror_pairs is not None:
+        return pairs_plane(points[mirror_pairs.vertex], mirror_pairs.twins_on(points))
+    both = (landmarks.left_weights > 0) & (landmarks.right_weights > 0)
+    return pairs_plane(points[landmarks.left[both]], points[landmarks.right[both]])
 
 
 def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExecutor):
@@ -159,12 +170,19 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExec
     checks = {}
     if options["checks"] != "none":
         starts = pool.submit(input_planes, points)  # beside the warp: the input's planes, then its asymmetry
-        checks["mirror_asymmetry_before"] = pool.submit(_mirror_check, input_asymmetry, points, faces, starts,
-                                                        diagonal)
+        if options["pairs"] == "landmarks":  # the pairs are known: the input's figures beside the warp too
+            checks["mirror_asymmetry_before"] = pool.submit(
+                _mirror_check, input_asymmetry, points, faces, starts, diagonal,
+                _solved_plane(points, problem.landmarks, None))
     result = solve_problem(problem, progress)
     if options["checks"] != "none":
-        checks["mirror_asymmetry_after"] = pool.submit(_mirror_check, output_asymmetry, result.points, faces, starts,
-                                                      diagonal)
+        if "mirror_asymmetry_before" not in checks:  # automatic pairs: known now
+            checks["mirror_asymmetry_before"] = pool.submit(
+                _mirror_check, input_asymmetry, points, faces, starts, diagonal,
+                _solved_plane(points, problem.landmarks, result.mirror_pairs))
+        checks["mirror_asymmetry_after"] = pool.submit(
+            _mirror_check, output_asymmetry, result.points, faces, starts, diagonal,
+            _solved_plane(result.points, problem.landmarks, result.mirror_pairs))
     if options["checks"] == "full":
         checks["hausdorff_input_output"] = pool.submit(two_way_distance, points, faces, result.points, faces)
     return result, checks
