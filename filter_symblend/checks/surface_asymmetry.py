@@ -63,16 +63,20 @@ def before_and_after(before: tuple[np.ndarray, np.ndarray], after: tuple[np.ndar
     reaches from them (:func:`best_plane_from`). The filter's checks, ``symblend symmetrize`` and
     ``symblend report`` all measure this way, so the same two surfaces and pairs give the same figures;
     both relative to ``before``'s bounding-box diagonal."""
-    starts = input_planes(before[0])
+    starts = input_planes(before[0], solved[0])
     diagonal = float(np.linalg.norm(np.ptp(before[0], axis=0)))
     return (input_asymmetry(*before, starts, diagonal, samples, solved[0]),
             output_asymmetry(*after, starts, diagonal, samples, solved[1]))
 
 
-def input_planes(points: np.ndarray) -> list[MirrorPlane]:
-    """The input's distinct mirror planes, best first, as the before/after checks find them
-    (:func:`surface_mirror_planes`, each ICP stopped at CHECK_CONVERGED)."""
-    return surface_mirror_planes(points, converged=CHECK_CONVERGED)
+def input_planes(points: np.ndarray, solved: MirrorPlane | None = None) -> list[MirrorPlane]:
+    """The input's distinct mirror planes as the before/after checks find them (:func:`surface_mirror_planes`,
+    each ICP stopped at CHECK_CONVERGED): without the ``solved`` pairs' plane, from the principal and the
+    screened starts, best first; with it, from the principal starts and it, unpolished (they only name the
+    other planes: the screening finds a plane where no pairs say which, and costs most of the checks)."""
+    if solved is None:
+        return surface_mirror_planes(points, converged=CHECK_CONVERGED)
+    return surface_mirror_planes(points, solved, converged=CHECK_CONVERGED, polish=False)
 
 
 def input_asymmetry(points: np.ndarray, faces: np.ndarray, starts: list[MirrorPlane], diagonal: float,

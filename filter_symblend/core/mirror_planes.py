@@ -68,8 +68,9 @@ def fit_surface_mirror_plane(points: np.ndarray, initial: MirrorFit | None = Non
     return surface_mirror_planes(points, initial, axes)[0]
 
 
-def surface_mirror_planes(points: np.ndarray, initial: MirrorFit | None = None,
-                          axes: np.ndarray | None = None, converged: float = CONVERGED) -> list[MirrorPlane]:
+def surface_mirror_planes(points: np.ndarray, initial: MirrorFit | MirrorPlane | None = None,
+                          axes: np.ndarray | None = None, converged: float = CONVERGED,
+                          polish: bool = True) -> list[MirrorPlane]:
     """Mirror planes of a point set (N, 3), best first.
 
     Starts from the planes through the centroid normal to the rows of ``axes``
@@ -79,8 +80,8 @@ def surface_mirror_planes(points: np.ndarray, initial: MirrorFit | None = None,
     each by trimmed reflection ICP on a sample of SCREEN_SAMPLES vertices, and
     returns the distinct planes they end in (normals more than DISTINCT apart), by
     trimmed RMS distance, the best refined again on at most ``ICP_SAMPLES`` evenly
-    strided vertices (a strongly bent shape's own plane can rank second); each ICP stops as
-    ``converged`` says (:func:`_refine_plane`). The normal of a flat point set lies in its plane.
+    strided vertices (a strongly bent shape's own plane can rank second; not with ``polish`` False); each
+    ICP stops as ``converged`` says (:func:`_refine_plane`). The normal of a flat point set lies in its plane.
     """
     sample = evenly(points, ICP_SAMPLES)
     centre = sample.mean(axis=0)
@@ -102,7 +103,7 @@ def surface_mirror_planes(points: np.ndarray, initial: MirrorFit | None = None,
     for normal, offset, _ in ends:
         if all(abs(normal @ other) < np.cos(DISTINCT) for other, _ in distinct):
             distinct.append(MirrorPlane(normal, float(offset)))
-    if len(coarse) < len(sample):
+    if polish and len(coarse) < len(sample):
         distinct[0] = MirrorPlane(*_refine_plane(sample, cKDTree(sample), *distinct[0], flat, converged)[:2])
     return distinct
 

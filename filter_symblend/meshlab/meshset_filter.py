@@ -153,8 +153,9 @@ def _solved_plane(points: np.ndarray, landmarks, mirror_pairs):
 def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExecutor):
     """(the warp of ``mesh`` with the fill of its missing region, {report key: future} of its checks); no
     layer added. ``options``: every parameter, validated. The checks run in ``pool`` once the problem is
-    valid: the input's from the start (its own planes, found beside the warp), the output's once the warp
-    is known (from the input's planes: one rule for both)."""
+    valid, each against the solved pairs' plane on its surface (checks/surface_asymmetry): the input's
+    beside the warp with landmark pairs, once they are known with automatic pairs; the output's once the
+    warp is known."""
     region = _missing_region(mesh, options["missing_region"], options["weight_attribute"])
     missing, missing_faces = (None, None) if region is None else region
     landmarks = {}
@@ -168,18 +169,18 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExec
     points, faces = problem.points, problem.faces
     diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
     checks = {}
-    if options["checks"] != "none":
-        starts = pool.submit(input_planes, points)  # beside the warp: the input's planes, then its asymmetry
-        if options["pairs"] == "landmarks":  # the pairs are known: the input's figures beside the warp too
-            checks["mirror_asymmetry_before"] = pool.submit(
-                _mirror_check, input_asymmetry, points, faces, starts, diagonal,
-                _solved_plane(points, problem.landmarks, None))
+    if options["checks"] != "none" and options["pairs"] == "landmarks":  # the pairs are known: beside the warp
+        solved = _solved_plane(points, problem.landmarks, None)
+        starts = pool.submit(input_planes, points, solved)
+        checks["mirror_asymmetry_before"] = pool.submit(_mirror_check, input_asymmetry, points, faces, starts,
+                                                        diagonal, solved)
     result = solve_problem(problem, progress)
     if options["checks"] != "none":
         if "mirror_asymmetry_before" not in checks:  # automatic pairs: known now
-            checks["mirror_asymmetry_before"] = pool.submit(
-                _mirror_check, input_asymmetry, points, faces, starts, diagonal,
-                _solved_plane(points, problem.landmarks, result.mirror_pairs))
+            solved = _solved_plane(points, problem.landmarks, result.mirror_pairs)
+            starts = pool.submit(input_planes, points, solved)
+            checks["mirror_asymmetry_before"] = pool.submit(_mirror_check, input_asymmetry, points, faces, starts,
+                                                            diagonal, solved)
         checks["mirror_asymmetry_after"] = pool.submit(
             _mirror_check, output_asymmetry, result.points, faces, starts, diagonal,
             _solved_plane(result.points, problem.landmarks, result.mirror_pairs))
