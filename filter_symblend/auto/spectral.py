@@ -34,11 +34,12 @@ import numpy as np
 import scipy.sparse as sparse
 from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import ArpackNoConvergence, eigsh
-from scipy.spatial import cKDTree
 
 from ..core.geometry import voxel_grid
 from ..core.mesh_graph import vertex_adjacency
 from .config import AutoConfig
+
+POINT_MAP_ROWS = 512  # rows of point_map's distance block: 512 x n float64, 20 MB at n = 5,000
 
 
 @dataclasses.dataclass(frozen=True)
@@ -198,8 +199,16 @@ def mirror_functional_map(points: np.ndarray, faces: np.ndarray, basis: Eigenbas
 
 def point_map(functions: np.ndarray, functional: np.ndarray) -> np.ndarray:
     """(n,) vertex map of a functional map: each vertex goes to the vertex whose spectral coordinates are
-    nearest its own mapped ones (``functions`` (n, k) @ ``functional`` (k, k))."""
-    return cKDTree(functions).query(functions @ functional)[1]
+    nearest its own mapped ones (``functions`` (n, k) @ ``functional`` (k, k)). Exhaustive, by blocks of
+    POINT_MAP_ROWS rows of |y|^2 - 2 x.y: in 12-60 dimensions a k-d tree prunes little (on 5,000 vertices
+    0.9 s against 0.09 s at 60, 0.14 s against 0.09 s at 12), and ZoomOut calls this about 50 times a run."""
+    mapped = functions @ functional
+    squares = np.einsum("ij,ij->i", functions, functions)
+    nearest = np.empty(len(mapped), dtype=np.int64)
+    for start in range(0, len(mapped), POINT_MAP_ROWS):
+        block = mapped[start:start + POINT_MAP_ROWS]
+        nearest[start:start + POINT_MAP_ROWS] = np.argmin(squares[None, :] - 2.0 * block @ functions.T, axis=1)
+    return nearest
 
 
 def zoomout(basis: Eigenbasis, vertex_map: np.ndarray, start: int, stop: int, step: int) -> np.ndarray:
