@@ -200,9 +200,12 @@ def mirror_functional_map(points: np.ndarray, faces: np.ndarray, basis: Eigenbas
 def point_map(functions: np.ndarray, functional: np.ndarray) -> np.ndarray:
     """(n,) vertex map of a functional map: each vertex goes to the vertex whose spectral coordinates are
     nearest its own mapped ones (``functions`` (n, k) @ ``functional`` (k, k)). Exhaustive, by blocks of
-    POINT_MAP_ROWS rows of |y|^2 - 2 x.y: in 12-60 dimensions a k-d tree prunes little (on 5,000 vertices
-    0.9 s against 0.09 s at 60, 0.14 s against 0.09 s at 12), and ZoomOut calls this about 50 times a run."""
-    mapped = functions @ functional
+    POINT_MAP_ROWS rows of |y|^2 - 2 x.y in float32: in 12-60 dimensions a k-d tree prunes little (on 5,000
+    vertices 0.9 s against 0.027 s at 60), and ZoomOut calls this about 50 times a run. float32 is 3x
+    faster than float64; on four BCICP shapes it changed the ZoomOut twin of 0-16 of about 5,000 vertices
+    (near ties) and no figure of the benchmark (docs/benchmarks.md)."""
+    mapped = (functions @ functional).astype(np.float32)
+    functions = functions.astype(np.float32)
     squares = np.einsum("ij,ij->i", functions, functions)
     nearest = np.empty(len(mapped), dtype=np.int64)
     for start in range(0, len(mapped), POINT_MAP_ROWS):
