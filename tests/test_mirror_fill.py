@@ -5,7 +5,8 @@ import pytest
 
 import filter_symblend
 from filter_symblend import MeshSetError, SymblendWarning
-from filter_symblend.core.mirror_fill import closest_points_on_surface, closest_points_on_triangles, fill_from_mirror
+from filter_symblend.core.mirror_fill import (TriangleSurface, closest_points_on_surface, closest_points_on_triangles,
+                                             fill_from_mirror)
 from conftest import meshset_with_pairs
 
 
@@ -25,6 +26,24 @@ def test_closest_points_on_triangles_match_a_dense_sampling():
         # the answer lies on the triangle: barycentric coordinates in [0, 1]
         weights = np.linalg.lstsq(np.column_stack([b[i] - a[i], c[i] - a[i]]), closest[i] - a[i], rcond=None)[0]
         assert weights.min() > -1e-9 and weights.sum() < 1 + 1e-9
+
+
+def test_the_surface_search_finds_what_every_triangle_measured_finds(cow):
+    """The search measures only the candidates that can beat the nearest centroid's triangle; queries near the
+    surface, on it and at vertices (where several triangles tie) get the distance and point that measuring every
+    triangle gives, and the first triangle of equal ones."""
+    rng = np.random.default_rng(3)
+    diagonal = np.linalg.norm(np.ptp(cow.points, axis=0))
+    queries = np.vstack([cow.points[::9] + rng.normal(size=(len(cow.points[::9]), 3)) * 0.01 * diagonal,
+                         cow.points[::13], cow.points[cow.faces[::17]].mean(axis=1) * [-1.0, 1.0, 1.0]])
+    face, closest, distance = TriangleSurface(cow.points, cow.faces).nearest(queries)
+    corners = cow.points[cow.faces]
+    for index, query in enumerate(queries):
+        every = closest_points_on_triangles(np.repeat(query[None], len(corners), axis=0), *corners.transpose(1, 0, 2))
+        gaps = np.linalg.norm(every - query, axis=1)
+        assert distance[index] == pytest.approx(gaps.min(), abs=1e-12 * diagonal)
+        np.testing.assert_allclose(closest[index], every[np.argmin(gaps)], atol=1e-9 * diagonal)
+        assert gaps[face[index]] == pytest.approx(gaps.min(), abs=1e-12 * diagonal)
 
 
 def test_closest_points_on_a_box_are_the_points_clamped_to_it():

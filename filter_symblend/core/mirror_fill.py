@@ -60,26 +60,47 @@ class TriangleSurface:
         centroids = (vertices[faces[:, 0]] + vertices[faces[:, 1]] + vertices[faces[:, 2]]) / 3.0
         # An unbalanced tree builds 2.4x faster (0.5 s for 2 million triangles) and answers as fast.
         self.tree = cKDTree(centroids, balanced_tree=False, compact_nodes=False)
+        # Each triangle lies within this distance of its centroid (its farthest corner).
+        self.radius = np.sqrt(np.max([np.sum((vertices[faces[:, corner]] - centroids) ** 2, axis=1)
+                                      for corner in range(3)], axis=0))
 
     def nearest(self, queries: np.ndarray):
-        """(face (Q,), closest point (Q, 3), distance (Q,)) for each query (Q, 3), in batches of ``QUERY_CHUNK``."""
+        """(face (Q,), closest point (Q, 3), distance (Q,)) for each query (Q, 3), in batches of ``QUERY_CHUNK``.
+        Of the candidates, only those that can beat the nearest centroid's triangle are measured: a
+        triangle is no nearer than its centroid's distance less its radius (the same answer, about twice
+        as fast)."""
         k = min(CANDIDATE_FACES, len(self.faces))
         face = np.empty(len(queries), dtype=np.int64)
         closest = np.empty((len(queries), 3))
         distance = np.empty(len(queries))
         for start in range(0, len(queries), QUERY_CHUNK):
             chunk = queries[start:start + QUERY_CHUNK]
-            candidates = self.tree.query(chunk, k=k)[1].reshape(len(chunk), k)
-            repeated = np.repeat(chunk, k, axis=0)
-            corners = self.vertices[self.faces[candidates.reshape(-1)]]
-            found = closest_points_on_triangles(repeated, corners[:, 0], corners[:, 1], corners[:, 2])
-            gaps = np.linalg.norm(found - repeated, axis=1).reshape(len(chunk), k)
-            best = gaps.argmin(axis=1)
-            rows = np.arange(len(chunk))
-            face[start:start + len(chunk)] = candidates[rows, best]
-            closest[start:start + len(chunk)] = found.reshape(len(chunk), k, 3)[rows, best]
-            distance[start:start + len(chunk)] = gaps[rows, best]
+            centre_distance, candidates = self.tree.query(chunk, k=k)
+            centre_distance, candidates = centre_distance.reshape(len(chunk), k), candidates.reshape(len(chunk), k)
+            first = self._closest(chunk, candidates[:, 0])
+            first_gap = np.linalg.norm(first - chunk, axis=1)
+            beaten = centre_distance[:, 1:] - self.radius[candidates[:, 1:]] < first_gap[:, None]
+            rows, columns = np.nonzero(beaten)
+            found = self._closest(chunk[rows], candidates[rows, columns + 1])
+            gaps = np.linalg.norm(found - chunk[rows], axis=1)
+            nearer = gaps < first_gap[rows]
+            # Written farthest first, so that each row keeps its nearest, the first candidate of equal ones.
+            measured = np.flatnonzero(nearer)
+            order = measured[np.lexsort((-columns[measured], -gaps[measured]))]
+            best_face, best_point, best_gap = candidates[:, 0].copy(), first, first_gap
+            best_face[rows[order]] = candidates[rows[order], columns[order] + 1]
+            best_point[rows[order]] = found[order]
+            best_gap[rows[order]] = gaps[order]
+            face[start:start + len(chunk)] = best_face
+            closest[start:start + len(chunk)] = best_point
+            distance[start:start + len(chunk)] = best_gap
         return face, closest, distance
+
+    def _closest(self, points: np.ndarray, faces: np.ndarray) -> np.ndarray:
+        """Closest point (m, 3) to each of ``points`` (m, 3) on the triangle ``faces`` (m,) of the surface."""
+        corners = self.faces[faces]
+        return closest_points_on_triangles(points, self.vertices[corners[:, 0]], self.vertices[corners[:, 1]],
+                                           self.vertices[corners[:, 2]])
 
 
 def closest_points_on_surface(vertices: np.ndarray, faces: np.ndarray, queries: np.ndarray) -> np.ndarray:
