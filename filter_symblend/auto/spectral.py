@@ -39,7 +39,7 @@ from ..core.geometry import voxel_grid
 from ..core.mesh_graph import vertex_adjacency
 from .config import AutoConfig
 
-POINT_MAP_ROWS = 512  # rows of point_map's distance block: 512 x n float64, 20 MB at n = 5,000
+POINT_MAP_ROWS = 512  # rows of point_map's distance block: 512 x n float32, 10 MB at n = 5,000
 
 
 @dataclasses.dataclass(frozen=True)

@@ -44,8 +44,9 @@ def distance_summary(distances: np.ndarray) -> dict[str, float]:
 
 
 def pairs_plane(first: np.ndarray, second: np.ndarray) -> MirrorPlane | None:
-    """The mirror plane of the pairs (first[k], second[k]), each (k, 3), fitted as Step 2 of the method fits
-    the landmarks' (core/landmark_asymmetry); None with fewer than PLANE_PAIRS pairs or any not finite."""
+    """The least-squares mirror plane of the pairs (first[k], second[k]), each (k, 3), as the landmark
+    asymmetry is measured (core/landmark_asymmetry.fit_mirror_plane); None with fewer than PLANE_PAIRS pairs
+    or any not finite."""
     first, second = np.asarray(first, dtype=float), np.asarray(second, dtype=float)
     if len(first) < PLANE_PAIRS or not (np.isfinite(first).all() and np.isfinite(second).all()):
         return None
