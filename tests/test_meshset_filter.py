@@ -1,6 +1,7 @@
 """The pymeshlab face: binding, the one new layer, what it keeps, and chaining with MeshLab filters."""
 
 import inspect
+import time
 import warnings
 
 import numpy as np
@@ -189,3 +190,20 @@ def test_mirror_asymmetry_on_a_sample_estimates_all_vertices(cow):
     every, sample = (mirror_asymmetry(bent, cow.faces, plane=plane, samples=count) for count in (None, 1000))
     assert every["measured_vertices"] == len(bent) and sample["measured_vertices"] == 1000
     assert sample["rms"] == pytest.approx(every["rms"], rel=0.1) and sample["max"] <= every["max"]
+
+
+@pytest.mark.parametrize("checks, measured", [("none", set()),
+                                              ("mirror", {"input_planes", "mirror_asymmetry_before", "mirror_asymmetry_after"}),
+                                              ("full", {"input_planes", "mirror_asymmetry_before", "mirror_asymmetry_after",
+                                                        "hausdorff_input_output"})])
+def test_the_report_times_the_whole_call_and_each_check(bent_cow_meshset, checks, measured):
+    """The core's stages sum to its total; each check that ran has its own seconds (run beside the core, they
+    may exceed what they add); the whole call, timed here from outside, includes the core."""
+    ms, *_ = bent_cow_meshset
+    start = time.perf_counter()
+    seconds = ms.generate_symmetrized_mesh(checks=checks)["seconds"]
+    outside = time.perf_counter() - start
+    stages = ("neighbourhoods", "local_transforms", "global_solve", "warp")
+    assert sum(seconds[stage] for stage in stages) == pytest.approx(seconds["total"])
+    assert set(seconds["checks"]) == measured and all(value > 0 for value in seconds["checks"].values())
+    assert seconds["total"] < seconds["filter"] <= outside

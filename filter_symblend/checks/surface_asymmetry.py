@@ -12,7 +12,7 @@ import numpy as np
 from ..core.geometry import MirrorPlane, reflection_across_plane
 from ..core.landmark_asymmetry import MirrorFit, fit_mirror_plane
 from ..core.mesh_quantities import evenly
-from ..core.mirror_fill import distances_to_surface
+from ..core.mirror_fill import distance_to
 from ..core.mirror_planes import (DISTINCT, SCREEN_SAMPLES, best_plane_from, fit_surface_mirror_plane,
                                   surface_mirror_planes)
 from .verdict import SCAN_NOISE, SOLVED
@@ -87,28 +87,32 @@ def input_asymmetry(points: np.ndarray, faces: np.ndarray, starts: list[MirrorPl
     ``diagonal``; ``plane_from`` says which (SOLVED or BEST); ``other_planes``: those of the ``starts``
     that mirror the input nearly as well (:func:`nearly_as_good`)."""
     plane = starts[0] if solved is None else best_plane_from(points, [solved], CHECK_CONVERGED)
-    measured = mirror_asymmetry(points, faces, plane=plane, samples=samples, diagonal=diagonal)
+    to_surface = distance_to(points, faces)  # one search tree for every plane measured
+    measured = mirror_asymmetry(points, faces, plane=plane, samples=samples, diagonal=diagonal, to_surface=to_surface)
     return {**measured, "plane_from": BEST if solved is None else SOLVED,
-            "other_planes": nearly_as_good(points, faces, plane, starts, diagonal)}
+            "other_planes": nearly_as_good(points, faces, plane, starts, diagonal, to_surface)}
 
 
 def nearly_as_good(points: np.ndarray, faces: np.ndarray, measured: MirrorPlane, planes: list[MirrorPlane],
-                   diagonal: float) -> list[dict]:
+                   diagonal: float, to_surface=None) -> list[dict]:
     """The ``planes`` other than the ``measured`` one (normals more than DISTINCT apart) that mirror most of
     the input (median mirror asymmetry within a scan's noise, SCAN_NOISE of the diagonal) and whose 90th
     percentile is within NEARLY of the measured plane's, or a scan's noise above it, or below it; on
     SCREEN_SAMPLES evenly strided vertices. A body of revolution or a box has several mirror planes, and the
     one measured need not be the only symmetry; a strongly bent shape, mirrored about as badly by several
-    planes, has none to name. Each as ``normal``, ``offset``, ``p90_relative`` (to ``diagonal``), best first."""
+    planes, has none to name. Each as ``normal``, ``offset``, ``p90_relative`` (to ``diagonal``), best first.
+    ``to_surface``: :func:`~filter_symblend.core.mirror_fill.distance_to` of the surface, if already built."""
     queries = evenly(points, SCREEN_SAMPLES)
+    to_surface = to_surface or distance_to(points, faces)
     normal = np.asarray(measured[0], dtype=float)
     others = [plane for plane in planes if abs(np.asarray(plane[0], dtype=float) @ normal) < np.cos(DISTINCT)]
     if not others:
         return []
-    bound = (1.0 + NEARLY) * np.percentile(mirror_distances(points, faces, *measured, queries), 90) + SCAN_NOISE * diagonal
+    bound = (1.0 + NEARLY) * np.percentile(mirror_distances(points, faces, *measured, queries, to_surface), 90) \
+        + SCAN_NOISE * diagonal
     close = []
     for other_normal, offset in others:
-        p50, p90 = np.percentile(mirror_distances(points, faces, other_normal, offset, queries), [50, 90])
+        p50, p90 = np.percentile(mirror_distances(points, faces, other_normal, offset, queries, to_surface), [50, 90])
         if p50 < SCAN_NOISE * diagonal and p90 <= bound:
             close.append({"normal": np.asarray(other_normal, dtype=float).tolist(), "offset": float(offset),
                           "p90_relative": float(p90) / diagonal})
@@ -126,23 +130,25 @@ def output_asymmetry(points: np.ndarray, faces: np.ndarray, starts: list[MirrorP
 
 
 def mirror_distances(points: np.ndarray, faces: np.ndarray, normal, offset: float,
-                     queries: np.ndarray | None = None) -> np.ndarray:
+                     queries: np.ndarray | None = None, to_surface=None) -> np.ndarray:
     """Distance (Q,) from each query (Q, 3) (default: every vertex) to the surface ``(points (N, 3), faces)``
     reflected across the plane, mesh units: the query is reflected instead, and its closest point found on
-    the surface itself; on a point cloud, the nearest point."""
+    the surface itself (by ``to_surface``, :func:`~filter_symblend.core.mirror_fill.distance_to` of it, when
+    already built); on a point cloud, the nearest point."""
     mirrored = reflection_across_plane(points if queries is None else queries, np.asarray(normal, dtype=float), offset)
-    return distances_to_surface(points, faces, mirrored)
+    return (to_surface or distance_to(points, faces))(mirrored)
 
 
 def mirror_asymmetry(points: np.ndarray, faces: np.ndarray, initial: MirrorFit | None = None,
                      plane: MirrorPlane | None = None, samples: int | None = None,
-                     diagonal: float | None = None) -> dict:
+                     diagonal: float | None = None, to_surface=None) -> dict:
     """The surface against its own reflection across its fitted plane.
 
     ``plane``: the result of ``fit_surface_mirror_plane(points,
     initial)`` when it is already known, so it is not fitted again. ``samples``: measure
     at most that many evenly strided vertices (all by default). ``diagonal``: the length the
-    ``*_relative`` figures divide by (default the surface's own bounding-box diagonal).
+    ``*_relative`` figures divide by (default the surface's own bounding-box diagonal). ``to_surface``:
+    :func:`~filter_symblend.core.mirror_fill.distance_to` of the surface, if already built.
 
     Returns ``{"max", "mean", "rms", "p50", "p90", "p99"}`` (mesh units), the
     same relative to the bounding-box diagonal (``*_relative``), the plane (``plane_normal``,
@@ -151,7 +157,7 @@ def mirror_asymmetry(points: np.ndarray, faces: np.ndarray, initial: MirrorFit |
     """
     normal, offset = fit_surface_mirror_plane(points, initial) if plane is None else plane
     queries = points if samples is None else evenly(points, samples)
-    distances = mirror_distances(points, faces, normal, offset, queries)
+    distances = mirror_distances(points, faces, normal, offset, queries, to_surface)
     if diagonal is None:
         diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
     stats = distance_summary(distances)

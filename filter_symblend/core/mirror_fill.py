@@ -112,9 +112,17 @@ def closest_points_on_surface(vertices: np.ndarray, faces: np.ndarray, queries: 
 def distances_to_surface(vertices: np.ndarray, faces: np.ndarray, queries: np.ndarray) -> np.ndarray:
     """Distance (Q,) from each query (Q, 3) to the surface ``(vertices (V, 3), faces (F, 3))``, mesh units;
     without faces (a point cloud), to its nearest point."""
+    return distance_to(vertices, faces)(queries)
+
+
+def distance_to(vertices: np.ndarray, faces: np.ndarray):
+    """The function queries (Q, 3) -> distance (Q,) to the surface of :func:`distances_to_surface`, its search
+    tree built once for every set of queries (at 10^6 vertices the tree costs about 0.5 s)."""
     if len(faces) == 0:
-        return cKDTree(vertices).query(queries)[0]
-    return TriangleSurface(vertices, faces).nearest(queries)[2]
+        tree = cKDTree(vertices)
+        return lambda queries: tree.query(queries)[0]
+    surface = TriangleSurface(vertices, faces)
+    return lambda queries: surface.nearest(queries)[2]
 
 
 def fill_from_mirror(points: np.ndarray, faces: np.ndarray, missing: np.ndarray, plane_normal,

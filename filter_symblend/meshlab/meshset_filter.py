@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import inspect
+import time
 import warnings
 from concurrent.futures import Future, ThreadPoolExecutor
 
@@ -140,6 +141,14 @@ def _mirror_check(side, points: np.ndarray, faces: np.ndarray, starts, diagonal:
     return {k: v for k, v in measured.items() if k != "per_vertex"}
 
 
+def _timed(seconds: dict, name: str, function, *args):
+    """``function(*args)``, its duration written to ``seconds[name]`` (a check's own time, in its thread)."""
+    start = time.perf_counter()
+    value = function(*args)
+    seconds[name] = time.perf_counter() - start
+    return value
+
+
 def _solved_plane(points: np.ndarray, landmarks, mirror_pairs):
     """The plane (checks/surface_asymmetry.pairs_plane) on ``points`` (N, 3), the input's or the output's,
     of the pairs solved: every automatic twin of ``mirror_pairs`` when there are some, else the checked
@@ -150,12 +159,12 @@ def _solved_plane(points: np.ndarray, landmarks, mirror_pairs):
     return pairs_plane(points[landmarks.left[both]], points[landmarks.right[both]])
 
 
-def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExecutor):
+def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExecutor, seconds: dict):
     """(the warp of ``mesh`` with the fill of its missing region, {report key: future} of its checks); no
     layer added. ``options``: every parameter, validated. The checks run in ``pool`` once the problem is
     valid, each against the solved pairs' plane on its surface (checks/surface_asymmetry): the input's
     beside the warp with landmark pairs, once they are known with automatic pairs; the output's once the
-    warp is known."""
+    warp is known. Each check's own seconds go to ``seconds`` under its report key."""
     region = _missing_region(mesh, options["missing_region"], options["weight_attribute"])
     missing, missing_faces = (None, None) if region is None else region
     landmarks = {}
@@ -171,21 +180,22 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExec
     checks = {}
     if options["checks"] != "none" and options["pairs"] == "landmarks":  # the pairs are known: beside the warp
         solved = _solved_plane(points, problem.landmarks, None)
-        starts = pool.submit(input_planes, points, solved)
-        checks["mirror_asymmetry_before"] = pool.submit(_mirror_check, input_asymmetry, points, faces, starts,
-                                                        diagonal, solved)
+        starts = pool.submit(_timed, seconds, "input_planes", input_planes, points, solved)
+        checks["mirror_asymmetry_before"] = pool.submit(_timed, seconds, "mirror_asymmetry_before", _mirror_check,
+                                                        input_asymmetry, points, faces, starts, diagonal, solved)
     result = solve_problem(problem, progress)
     if options["checks"] != "none":
         if "mirror_asymmetry_before" not in checks:  # automatic pairs: known now
             solved = _solved_plane(points, problem.landmarks, result.mirror_pairs)
-            starts = pool.submit(input_planes, points, solved)
-            checks["mirror_asymmetry_before"] = pool.submit(_mirror_check, input_asymmetry, points, faces, starts,
-                                                            diagonal, solved)
+            starts = pool.submit(_timed, seconds, "input_planes", input_planes, points, solved)
+            checks["mirror_asymmetry_before"] = pool.submit(_timed, seconds, "mirror_asymmetry_before", _mirror_check,
+                                                            input_asymmetry, points, faces, starts, diagonal, solved)
         checks["mirror_asymmetry_after"] = pool.submit(
-            _mirror_check, output_asymmetry, result.points, faces, starts, diagonal,
-            _solved_plane(result.points, problem.landmarks, result.mirror_pairs))
+            _timed, seconds, "mirror_asymmetry_after", _mirror_check, output_asymmetry, result.points, faces, starts,
+            diagonal, _solved_plane(result.points, problem.landmarks, result.mirror_pairs))
     if options["checks"] == "full":
-        checks["hausdorff_input_output"] = pool.submit(two_way_distance, points, faces, result.points, faces)
+        checks["hausdorff_input_output"] = pool.submit(_timed, seconds, "hausdorff_input_output", two_way_distance,
+                                                       points, faces, result.points, faces)
     return result, checks
 
 
@@ -212,7 +222,10 @@ def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict |
     script rehearsed on a copy of the MeshSet does not compute the same warp twice.
 
     The before/after checks (numpy and scipy) run in a second thread beside the warp and beside
-    MeshLab's filters building the output layer (which release the GIL), so they add little time."""
+    MeshLab's filters building the output layer (which release the GIL). The report's ``seconds`` holds the
+    core's stages and ``total`` (the core), ``checks`` (each check's own seconds: ``input_planes``, then
+    each figure's measurement after it; they overlap the core) and ``filter`` (the whole call)."""
+    clock = time.perf_counter()
     options = validate_parameters(params)
     if ms.mesh_number() == 0:
         raise MeshSetError(
@@ -233,8 +246,9 @@ def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict |
         with recording.recorded_call(ms, options):  # our native steps, saved as one node of ours
             output_id = _add_output_layer(ms, input_id, result, carried)
     else:
+        check_seconds = {}
         with ThreadPoolExecutor(max_workers=1) as pool:
-            result, checks = _compute(mesh, options, progress, pool)
+            result, checks = _compute(mesh, options, progress, pool, check_seconds)
             with recording.recorded_call(ms, options):
                 output_id = _add_output_layer(ms, input_id, result, carried, list(checks.values()))
                 unchanged = _needs_nothing(checks, result.report.get("landmark_asymmetry_before"))
@@ -244,6 +258,7 @@ def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict |
                     ms.delete_current_mesh()
                     output_id = _add_output_layer(ms, input_id, result, carried)
         result.report.update({name: check.result() for name, check in checks.items()})
+        result.report["seconds"]["checks"] = check_seconds
         if "mirror_asymmetry_after" in result.report:
             report = result.report
             report["warnings"] = result_warnings(
@@ -257,7 +272,8 @@ def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict |
                     report["hausdorff_input_output"] = dict.fromkeys(report["hausdorff_input_output"], 0.0)
         if cache is not None:
             cache[key] = result
-    return {**result.report, "input_mesh_id": input_id, "output_mesh_id": output_id}
+    seconds = {**result.report["seconds"], "filter": time.perf_counter() - clock}
+    return {**result.report, "seconds": seconds, "input_mesh_id": input_id, "output_mesh_id": output_id}
 
 
 def generate_symmetrized_mesh(ms: pymeshlab.MeshSet, progress=None, **params) -> dict:

@@ -64,7 +64,8 @@ def filter_row(mesh: str, pairs: int, checks: str) -> None:
     total = time.perf_counter() - start
     ms.save_current_mesh(mesh.replace(".ply", "_out.ply"))
     print(json.dumps({"vertices": len(points), "pairs": len(left), "core": report["seconds"]["total"],
-                      "total": total, "rss": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
+                      "checks": report["seconds"]["checks"], "total": total,
+                      "rss": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
 
 
 # `symblend report` as the console script runs it, then the process's own peak RSS (MB) on the last line.
@@ -80,8 +81,11 @@ def filter_main() -> None:
         return
     print(f"\nThe whole filter against its core ({time.strftime('%Y-%m-%d')}, {os.cpu_count()} cores): Igea, "
           "Figure 1 map, approximate mirror pairs; standard mode, phi width 8; peak RSS of the process")
-    print("| mesh | vertices | pairs | checks | core s | filter s | filter / core of 'none' | peak RSS MB |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("Each check's own seconds, in its thread beside the core: the input's (its planes, then its figures), the "
+          "output's, the two-way Hausdorff distance.")
+    print("| mesh | vertices | pairs | checks | core s | input's check s | output's s | Hausdorff s | filter s "
+          "| filter / core of 'none' | peak RSS MB |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as folder:
         made, core = {}, {}
         for name, faces, pairs, checks in FILTER_ROWS:
@@ -91,7 +95,11 @@ def filter_main() -> None:
             out, _ = child([sys.executable, str(ENTRY), "--filter-row", path, str(pairs), checks])
             row = json.loads(out.strip().splitlines()[-1])
             core.setdefault(name, row["core"])
-            print(f"| {name} | {row['vertices']:,} | {row['pairs']:,} | {checks} | {row['core']:.2f} | "
+            measured = row["checks"]
+            own = [measured.get("input_planes", 0.0) + measured.get("mirror_asymmetry_before", 0.0),
+                   measured.get("mirror_asymmetry_after", 0.0), measured.get("hausdorff_input_output", 0.0)]
+            cells = " | ".join(f"{value:.2f}" if value else "-" for value in own)
+            print(f"| {name} | {row['vertices']:,} | {row['pairs']:,} | {checks} | {row['core']:.2f} | {cells} | "
                   f"{row['total']:.2f} | {row['total'] / core[name]:.2f} | {row['rss']:.0f} |", flush=True)
         print("\n`symblend report BEFORE AFTER` (the process as a whole, start-up included)")
         print("| mesh | vertices | s | peak RSS MB |")
