@@ -193,9 +193,10 @@ PARAMETERS: tuple[Parameter, ...] = (
         "checks", "enum", "mirror", "Before/after checks",
         "What the report measures besides the landmarks. 'mirror': the surface's mirror asymmetry before "
         "and after (max, mean, RMS, median, 90th and 99th percentiles), the distance from 5,000 evenly "
-        "strided vertices to the surface reflected across its own mirror plane, each surface's fitted by the "
-        "same rule from the input's starting planes, as symblend report fits them; warnings when the output "
-        "is worse than the input or the input needs nothing; a fraction of the filter's time. 'full': also the "
+        "strided vertices to the surface reflected across the plane of the pairs solved, refined to each "
+        "surface, as symblend report measures them; warnings when the output is worse than the input, is "
+        "left asymmetric by automatic pairs, or the input needs nothing; a fraction of the filter's time "
+        "(beside the warp). 'full': also the "
         "two-way Hausdorff distance between input and output (from at most 20,000 evenly strided vertices "
         "of each to the other surface; it about doubles the filter's time, measured at 32k vertices). "
         "'none': neither.",
