@@ -40,8 +40,9 @@ from .common import quiet
 
 SNAPSHOT = pathlib.Path("/work/.mirror/llorz+SGA18_orientation_BCICP_dataset/repo")
 FOLDERS = {"FAUST": "Dataset/FAUST/vtx_5k", "TOSCA": "Dataset/TOSCA_Isometric/vtx_5k"}
-# The stated subset (about 9 minutes on 2 cores, pyFM included): ten FAUST humans (ten subjects, a pose each) and one or two
-# poses of every TOSCA class. --quick: six of them; --all-shapes: every shape of both folders (25 minutes before the 1,000-landmark column).
+# The stated subset (about 9 minutes on 2 cores, pyFM included): ten FAUST humans (ten subjects, a pose each) and
+# one or two poses of every TOSCA class. --quick: six of them; --all-shapes: every shape of both folders (25 minutes
+# before the 1,000-landmark column).
 SUBSET = {"FAUST": [f"tr_reg_{i:03d}" for i in range(0, 100, 11)],
           "TOSCA": ["cat0", "cat4", "centaur0", "david0", "dog0", "horse0", "horse5", "michael0", "michael8",
                     "victoria0", "wolf0", "wolf2"]}
