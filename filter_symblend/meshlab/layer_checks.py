@@ -10,10 +10,8 @@ from scipy.spatial import cKDTree
 
 from ..checks.hausdorff import two_way_distance
 from ..checks.surface_asymmetry import CHECK_SAMPLES, before_and_after, pairs_plane
-from ..core.landmark_pairs import pairs_from_attribute
 from ..errors import LandmarkError
-from ..parameters import DEFAULTS
-from .attributes import optional_attribute
+from .attributes import read_landmark_attributes
 from .meshset_filter import TWIN_ATTRIBUTE
 
 
@@ -45,17 +43,14 @@ def solved_planes(before: pymeshlab.Mesh, after: pymeshlab.Mesh) -> tuple:
         twin_vertex = cKDTree(moved).query(twins[vertex])[1]
         return pairs_plane(points[vertex], points[twin_vertex]), pairs_plane(moved[vertex], twins[vertex])
     for mesh in (after, before):
-        labels = optional_attribute(mesh, DEFAULTS["pair_attribute"])
         try:
-            pairs = None if labels is None else pairs_from_attribute(labels, DEFAULTS["pair_attribute"])
-        except LandmarkError:  # not the filter's pairs: the figures use the best plane, and say so
-            pairs = None
-        if pairs is not None:
-            weights = optional_attribute(mesh, DEFAULTS["weight_attribute"])
-            both = np.ones(len(pairs.left), dtype=bool) if weights is None else (
-                (weights[pairs.left] > 0) & (weights[pairs.right] > 0))
-            left, right = pairs.left[both], pairs.right[both]
-            return pairs_plane(points[left], points[right]), pairs_plane(moved[left], moved[right])
+            pairs = read_landmark_attributes(mesh)
+        except LandmarkError:  # none, or not the filter's pairs: the figures use the best plane, and say so
+            continue
+        both = np.ones(len(pairs.left), dtype=bool) if pairs.left_weights is None else (
+            (pairs.left_weights > 0) & (pairs.right_weights > 0))
+        left, right = pairs.left[both], pairs.right[both]
+        return pairs_plane(points[left], points[right]), pairs_plane(moved[left], moved[right])
     return None, None
 
 

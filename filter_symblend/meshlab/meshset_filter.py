@@ -178,18 +178,21 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExec
     points, faces = problem.points, problem.faces
     diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
     checks = {}
-    if options["checks"] != "none" and options["pairs"] == "landmarks":  # the pairs are known: beside the warp
-        solved = _solved_plane(points, problem.landmarks, None)
+
+    def check_input(mirror_pairs) -> Future:
+        """Submit the input's check, against the plane of the pairs solved; the future of its planes."""
+        solved = _solved_plane(points, problem.landmarks, mirror_pairs)
         starts = pool.submit(_timed, seconds, "input_planes", input_planes, points, solved)
         checks["mirror_asymmetry_before"] = pool.submit(_timed, seconds, "mirror_asymmetry_before", _mirror_check,
                                                         input_asymmetry, points, faces, starts, diagonal, solved)
+        return starts
+
+    if options["checks"] != "none" and options["pairs"] == "landmarks":  # the pairs are known: beside the warp
+        starts = check_input(None)
     result = solve_problem(problem, progress)
     if options["checks"] != "none":
         if "mirror_asymmetry_before" not in checks:  # automatic pairs: known now
-            solved = _solved_plane(points, problem.landmarks, result.mirror_pairs)
-            starts = pool.submit(_timed, seconds, "input_planes", input_planes, points, solved)
-            checks["mirror_asymmetry_before"] = pool.submit(_timed, seconds, "mirror_asymmetry_before", _mirror_check,
-                                                            input_asymmetry, points, faces, starts, diagonal, solved)
+            starts = check_input(result.mirror_pairs)
         checks["mirror_asymmetry_after"] = pool.submit(
             _timed, seconds, "mirror_asymmetry_after", _mirror_check, output_asymmetry, result.points, faces, starts,
             diagonal, _solved_plane(result.points, problem.landmarks, result.mirror_pairs))
