@@ -2,41 +2,54 @@
 
 Implements Ghosh, Amenta and Kazhdan, *Closed-form Blending of Local
 Symmetries* (SGP 2010). Importing the package binds
-``pymeshlab.MeshSet.generate_symmetrized_mesh``; ``apply_filter_script`` and
-``save_filter_script`` run and record MeshLab filter scripts that use it.
-Without pymeshlab, the array API (``symmetrize``, and everything under core/,
-landmarks/, checks/ and auto/) still imports and runs.
+``pymeshlab.MeshSet.generate_symmetrized_mesh`` (now if pymeshlab is loaded,
+else as soon as it is); ``apply_filter_script`` and ``save_filter_script``
+run and record MeshLab filter scripts that use it. The array API
+(``symmetrize``, and everything under core/, landmarks/, checks/, auto/ and
+pipeline/) imports and runs without pymeshlab, and does not load it.
 """
 
-from .commands.start import quiet_interrupt_while_loading
-
-quiet_interrupt_while_loading()  # acts only in the symblend command's own process
+import importlib
 
 from .core.mirror_pairs import MirrorPairs
 from .core.symmetrize import SymmetrizationResult
 from .errors import (GeometryError, LandmarkError, MeshSetError, ParameterError, SymblendError,
                      SymblendWarning, SymmetryNotFoundError)
 from .landmarks.from_file import pairs_from_landmark_file
+from .meshlab.when_imported import bind_when_pymeshlab_imported
 from .parameters import PARAMETERS
 from .pipeline import find_mirror_pairs, symmetrize
+
+bind_when_pymeshlab_imported()
+
+_MESHLAB_NAMES = {  # loaded on first use, with pymeshlab
+    "ASYMMETRY_ATTRIBUTE": "meshset_filter", "CONFIDENCE_ATTRIBUTE": "meshset_filter",
+    "DISPLAY_NAME": "meshset_filter", "FILTER_NAME": "meshset_filter", "TWIN_ATTRIBUTE": "meshset_filter",
+    "UNCERTAINTY_ATTRIBUTE": "meshset_filter", "generate_symmetrized_mesh": "meshset_filter",
+    "ScriptError": "mlx", "apply_filter_script": "script_runner", "save_filter_script": "script_runner",
+}
 
 __all__ = [
     "PARAMETERS", "GeometryError", "LandmarkError", "MeshSetError", "MirrorPairs", "ParameterError", "SymblendError",
     "SymblendWarning", "SymmetrizationResult", "SymmetryNotFoundError", "find_mirror_pairs", "pairs_from_landmark_file",
-    "symmetrize",
+    "symmetrize", *sorted(_MESHLAB_NAMES),
 ]
 
-try:
-    from .meshlab.meshset_filter import (ASYMMETRY_ATTRIBUTE, CONFIDENCE_ATTRIBUTE, DISPLAY_NAME, FILTER_NAME,
-                                         TWIN_ATTRIBUTE, UNCERTAINTY_ATTRIBUTE, bind_to_meshset,
-                                         generate_symmetrized_mesh)
-    from .meshlab.mlx import ScriptError
-    from .meshlab.script_runner import apply_filter_script, save_filter_script
-except ImportError as error:
-    if error.name != "pymeshlab":  # without pymeshlab, the array API above still works: anything else is a bug
-        raise
-else:
-    bind_to_meshset()
-    __all__ += ["ASYMMETRY_ATTRIBUTE", "CONFIDENCE_ATTRIBUTE", "DISPLAY_NAME", "FILTER_NAME", "ScriptError",
-                "TWIN_ATTRIBUTE", "UNCERTAINTY_ATTRIBUTE", "apply_filter_script", "generate_symmetrized_mesh",
-                "save_filter_script"]
+
+def __getattr__(name):
+    if name not in _MESHLAB_NAMES:
+        raise AttributeError(f"module 'filter_symblend' has no attribute {name!r}")
+    try:
+        module = importlib.import_module(f".meshlab.{_MESHLAB_NAMES[name]}", __name__)
+    except ImportError as error:
+        if error.name != "pymeshlab":
+            raise
+        raise AttributeError(f"filter_symblend.{name} needs pymeshlab, which is not installed here: "
+                             "pip install pymeshlab") from error
+    value = getattr(module, name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_MESHLAB_NAMES))

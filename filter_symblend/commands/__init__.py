@@ -13,3 +13,8 @@ and checks and converts landmarks.
 The filter options are generated from the filter's parameter declaration.
 Errors are one line on stderr and nothing is written; exit status 1 bad input, 2 usage, 130 interrupted.
 """
+
+from .start import quiet_interrupt_while_loading
+
+quiet_interrupt_while_loading()  # first: acts only in the symblend command's own process
+

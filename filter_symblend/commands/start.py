@@ -1,6 +1,6 @@
-"""The ``symblend`` command's start-up: a Ctrl-C while the libraries load exits 130 with one line.
+"""The ``symblend`` command's start-up: a Ctrl-C while pymeshlab and the commands load exits 130, one line.
 
-Imported first by the package; it acts only when this process is the ``symblend`` console script, and
+Imported first by the commands package; it acts only when this process is the ``symblend`` console script, and
 :func:`filter_symblend.commands.main.main` restores Python's own handler once start-up is over.
 """
 
