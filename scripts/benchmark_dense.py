@@ -24,7 +24,8 @@ import pymeshlab
 from scipy.interpolate import RBFInterpolator
 
 import filter_symblend  # noqa: F401  (binds the filter)
-from filter_symblend import SymblendWarning, symmetrize, synthetic
+from filter_symblend import SymblendWarning, symmetrize
+from filter_symblend.testing import synthetic
 from filter_symblend.core import splines, warp
 
 SHARED = pathlib.Path(__file__).resolve().parents[2] / "shared" / "data"

@@ -19,7 +19,7 @@ import time
 import numpy as np
 import pymeshlab
 
-from filter_symblend import synthetic
+from filter_symblend.testing import synthetic
 from filter_symblend.core.mesh_quantities import farthest_point_order
 from filter_symblend.landmarks.geometric_pairing import pair_by_geometry
 

@@ -10,8 +10,8 @@ import numpy as np
 import pymeshlab
 import pytest
 
-from filter_symblend import synthetic
-from filter_symblend.meshlab.ground_truth import remeshed
+from filter_symblend.testing import synthetic
+from filter_symblend.testing.remeshing import remeshed
 
 SAMPLE_MESHES = pathlib.Path(pymeshlab.__file__).parent / "tests" / "sample_meshes"
 SHARED_DATA = pathlib.Path(__file__).resolve().parents[1].parent / "shared" / "data"

@@ -5,7 +5,8 @@ import pymeshlab
 import pytest
 
 import filter_symblend
-from filter_symblend import LandmarkError, synthetic
+from filter_symblend import LandmarkError
+from filter_symblend.testing import synthetic
 from filter_symblend.meshlab.attributes import read_landmark_attributes, write_landmark_attributes
 from filter_symblend.core.landmark_pairs import LandmarkPairs
 

@@ -8,7 +8,8 @@ import warnings
 import numpy as np
 import pytest
 
-from filter_symblend import SymblendWarning, symmetrize, synthetic
+from filter_symblend import SymblendWarning, symmetrize
+from filter_symblend.testing import synthetic
 from filter_symblend.auto import AutoConfig
 from filter_symblend.auto.spectral import intrinsic_mirror, working_mesh
 

@@ -10,10 +10,11 @@ from scipy.spatial import cKDTree
 
 import filter_symblend  # noqa: F401  (binds the filter)
 from filter_symblend import (GeometryError, LandmarkError, ParameterError, SymblendError, SymblendWarning,
-                             SymmetryNotFoundError, symmetrize, synthetic)
+                             SymmetryNotFoundError, symmetrize)
 from filter_symblend.auto import AutoConfig
 from filter_symblend.auto.maps import plane_map
 from filter_symblend.auto.surface import Surface
+from filter_symblend.testing import synthetic
 from filter_symblend.auto.twins import find_twins
 from filter_symblend.core.mesh_quantities import mean_spacing, vertex_normals
 from filter_symblend.core.mirror_fill import closest_points_on_surface

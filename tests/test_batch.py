@@ -8,7 +8,8 @@ import numpy as np
 import pymeshlab
 import pytest
 
-from filter_symblend import SymblendError, synthetic
+from filter_symblend import SymblendError
+from filter_symblend.testing import synthetic
 from filter_symblend.commands.batch import read_manifest, run
 from filter_symblend.commands.main import main
 from filter_symblend.core.landmark_asymmetry import fit_mirror_plane

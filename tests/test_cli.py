@@ -10,7 +10,8 @@ import numpy as np
 import pymeshlab
 import pytest
 
-from filter_symblend import DISPLAY_NAME, PARAMETERS, synthetic
+from filter_symblend import DISPLAY_NAME, PARAMETERS
+from filter_symblend.testing import synthetic
 from filter_symblend.commands.main import main
 from conftest import meshlab_mirror_distance
 from filter_symblend.landmarks.files import Landmark, LandmarkSet, read_landmarks, write_landmarks

@@ -6,7 +6,8 @@ import pymeshlab
 import pytest
 from scipy.spatial import cKDTree
 
-from filter_symblend import LandmarkError, SymblendWarning, symmetrize, synthetic
+from filter_symblend import LandmarkError, SymblendWarning, symmetrize
+from filter_symblend.testing import synthetic
 from filter_symblend.landmarks.curves import add_curve_pairs, find_curves
 from filter_symblend.landmarks.files import Landmark, LandmarkSet
 from filter_symblend.core.mesh_quantities import farthest_point_order

@@ -6,7 +6,8 @@ import numpy as np
 import pymeshlab
 import pytest
 
-from filter_symblend import GeometryError, symmetrize, synthetic
+from filter_symblend import GeometryError, symmetrize
+from filter_symblend.testing import synthetic
 from filter_symblend.commands.main import main
 
 

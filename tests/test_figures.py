@@ -8,7 +8,7 @@ import numpy as np
 import pymeshlab
 import pytest
 
-from filter_symblend import synthetic
+from filter_symblend.testing import synthetic
 from filter_symblend.core.landmark_asymmetry import fit_mirror_plane
 from filter_symblend.checks.verdict import LEFT_ASYMMETRIC
 from filter_symblend.commands.main import main

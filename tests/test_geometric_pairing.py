@@ -6,7 +6,8 @@ import numpy as np
 import pymeshlab
 import pytest
 
-from filter_symblend import LandmarkError, synthetic
+from filter_symblend import LandmarkError
+from filter_symblend.testing import synthetic
 from filter_symblend.commands.main import main
 from filter_symblend.core.geometry import reflection_across_plane
 from filter_symblend.core.mesh_quantities import farthest_point_order

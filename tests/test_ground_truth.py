@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from filter_symblend import SymblendWarning, symmetrize, synthetic
+from filter_symblend import SymblendWarning, symmetrize
+from filter_symblend.testing import synthetic
 from filter_symblend.core.baseline import mirror_average
 from filter_symblend.core.geometry import reflection_across_plane, rigid_fit
 from filter_symblend.core.mesh_quantities import farthest_point_order

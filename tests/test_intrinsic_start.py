@@ -8,7 +8,8 @@ import pymeshlab
 import pytest
 from scipy.spatial import cKDTree
 
-from filter_symblend import SymblendWarning, SymmetryNotFoundError, synthetic
+from filter_symblend import SymblendWarning, SymmetryNotFoundError
+from filter_symblend.testing import synthetic
 from filter_symblend.auto.config import DEFAULT
 from filter_symblend.auto.intrinsic_start import (DESCRIPTOR_AGREEMENT, cannot_start, descriptor_disagreement,
                                                   intrinsic_start)

@@ -25,7 +25,7 @@ def test_the_array_api_runs_without_pymeshlab():
         sys.modules["pymeshlab"] = None  # import pymeshlab now raises ImportError
         import numpy as np
         import filter_symblend
-        from filter_symblend import synthetic
+        from filter_symblend.testing import synthetic
 
         points, faces = synthetic.icosphere(3)
         points = synthetic.bumpy(points)

@@ -6,7 +6,8 @@ import numpy as np
 import pymeshlab
 import pytest
 
-from filter_symblend import DISPLAY_NAME, PARAMETERS, ScriptError, apply_filter_script, synthetic
+from filter_symblend import DISPLAY_NAME, PARAMETERS, ScriptError, apply_filter_script
+from filter_symblend.testing import synthetic
 from filter_symblend.meshlab import filter_names
 from conftest import meshset_with_pairs
 

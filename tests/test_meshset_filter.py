@@ -9,7 +9,8 @@ import pymeshlab
 import pytest
 
 import filter_symblend
-from filter_symblend import ASYMMETRY_ATTRIBUTE, PARAMETERS, SymblendWarning, synthetic
+from filter_symblend import ASYMMETRY_ATTRIBUTE, PARAMETERS, SymblendWarning
+from filter_symblend.testing import synthetic
 
 from conftest import SAMPLE_MESHES, meshlab_mirror_distance, meshset_with_pairs
 

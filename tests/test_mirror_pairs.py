@@ -7,7 +7,8 @@ import re
 import numpy as np
 import pytest
 
-from filter_symblend import MirrorPairs, ParameterError, find_mirror_pairs, synthetic
+from filter_symblend import MirrorPairs, ParameterError, find_mirror_pairs
+from filter_symblend.testing import synthetic
 from filter_symblend.auto.config import DEFAULT
 from filter_symblend.auto.confidence import mirror_pairs
 from filter_symblend.auto.maps import MirrorMap, plane_map

@@ -28,7 +28,7 @@ def test_the_readme_example_runs(tmp_path, monkeypatch):
     import numpy as np
     import pymeshlab
 
-    from filter_symblend import synthetic
+    from filter_symblend.testing import synthetic
     from filter_symblend.core.landmark_asymmetry import fit_mirror_plane
 
     original = namespace["ms"].mesh(0).vertex_matrix()

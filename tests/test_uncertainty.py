@@ -8,7 +8,8 @@ import numpy as np
 import pymeshlab
 import pytest
 
-from filter_symblend import UNCERTAINTY_ATTRIBUTE, GeometryError, ParameterError, symmetrize, synthetic
+from filter_symblend import UNCERTAINTY_ATTRIBUTE, GeometryError, ParameterError, symmetrize
+from filter_symblend.testing import synthetic
 from filter_symblend.commands.main import main
 from filter_symblend.core import uncertainty
 from filter_symblend.core.geometry import rigid_fit

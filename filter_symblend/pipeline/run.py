@@ -145,7 +145,7 @@ SymmetryNotFoundError when automatic pairs find no mirror symmetry.
 Examples
 --------
 >>> import numpy as np, filter_symblend
->>> from filter_symblend import synthetic
+>>> from filter_symblend.testing import synthetic
 >>> points, faces = synthetic.icosphere(3)
 >>> result = filter_symblend.symmetrize(synthetic.bend(synthetic.bumpy(points), 0.3), faces=faces, pairs="auto")
 >>> result.report["auto_pairs"]["twins_are"]
@@ -167,7 +167,7 @@ def find_mirror_pairs(points, faces=None, left=None, right=None, pair_ids=None, 
     share of pairable vertices with a twin and with a confident one).
 
     >>> import filter_symblend
-    >>> from filter_symblend import synthetic
+    >>> from filter_symblend.testing import synthetic
     >>> points, faces = synthetic.icosphere(3)
     >>> twins = filter_symblend.find_mirror_pairs(synthetic.bend(synthetic.bumpy(points), 0.3), faces)
     >>> bool(twins.report["confident_share"] > 0.9)

@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pymeshlab
 
-from filter_symblend import GeometryError, symmetrize, synthetic
+from filter_symblend import GeometryError, symmetrize
+from filter_symblend.testing import synthetic
 
 from .accuracy import errors
 from .common import EXACT, IGEA, MESHES, igea_meshes, load, table_meshes

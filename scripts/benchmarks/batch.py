@@ -10,7 +10,7 @@ import time
 
 import pymeshlab
 
-from filter_symblend import synthetic
+from filter_symblend.testing import synthetic
 
 from .common import MESHES, child, subdivided_cows
 

@@ -12,7 +12,8 @@ import warnings
 import numpy as np
 import pymeshlab
 
-from filter_symblend import SymblendWarning, synthetic
+from filter_symblend import SymblendWarning
+from filter_symblend.testing import synthetic
 
 SAMPLES = pathlib.Path(pymeshlab.__file__).parent / "tests" / "sample_meshes"
 SHARED = pathlib.Path(__file__).resolve().parents[3] / "shared" / "data"  # beside the repository

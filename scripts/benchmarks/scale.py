@@ -8,7 +8,8 @@ import time
 import numpy as np
 import pymeshlab
 
-from filter_symblend import symmetrize, synthetic
+from filter_symblend import symmetrize
+from filter_symblend.testing import synthetic
 from filter_symblend.core import splines, warp
 from filter_symblend.core.baseline import mirror_average
 from filter_symblend.core.global_solve import global_solve

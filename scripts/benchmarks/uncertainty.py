@@ -19,7 +19,8 @@ import time
 import numpy as np
 import pymeshlab
 
-from filter_symblend import symmetrize, synthetic
+from filter_symblend import symmetrize
+from filter_symblend.testing import synthetic
 from filter_symblend.core.geometry import similarity_fit
 
 from .common import MESHES, load, measured, quiet

@@ -14,7 +14,7 @@ import time
 import numpy as np
 import pymeshlab
 
-from filter_symblend import synthetic
+from filter_symblend.testing import synthetic
 
 from .common import IGEA, SCAN_OPTIONS, child, igea_meshes, scan_pairs
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pymeshlab
 
-from .. import synthetic
+from . import synthetic
 
 
 def remeshed(points: np.ndarray, faces: np.ndarray, offset: float, edge_percent: float) -> synthetic.SurfaceTruth:

@@ -10,11 +10,11 @@ import dataclasses
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .core.geometry import normalize, rotation_about_axis, similarity_fit, voxel_grid
-from .core.landmark_asymmetry import fit_mirror_plane
-from .core.mesh_quantities import farthest_point_order
-from .core.mirror_fill import TriangleSurface
-from .core.surface_points import barycentric, vertex_points
+from ..core.geometry import normalize, rotation_about_axis, similarity_fit, voxel_grid
+from ..core.landmark_asymmetry import fit_mirror_plane
+from ..core.mesh_quantities import farthest_point_order
+from ..core.mirror_fill import TriangleSurface
+from ..core.surface_points import barycentric, vertex_points
 
 
 def mirror_partners(points: np.ndarray, tolerance: float = 1e-4):
