@@ -29,7 +29,7 @@ import numpy as np
 from ..core.geometry import voxel_grid
 from ..core.mesh_graph import one_pair_per_vertex
 from ..core.surface_points import vertex_points
-from ..core.symmetrize import CheckedLandmarks, check_landmarks
+from ..core.landmark_pairs import LandmarkPairs, check_landmarks
 from ..errors import GeometryError
 from .config import AutoConfig
 from .connectivity import ring_consistent, tessellation_mirror
@@ -60,7 +60,7 @@ class Constraints:
     part), by the thresholds of ``config``."""
 
     geometry: Surface
-    fixed: CheckedLandmarks | None
+    fixed: LandmarkPairs | None
     forbidden: np.ndarray
     config: AutoConfig
 
@@ -166,7 +166,7 @@ def _exact_pairs(mirror: MirrorMap, sources: np.ndarray, twins, exact_twins: np.
                           chosen[on_plane], {**info, "twins_are": "exact vertices", "candidates": len(candidates)})
 
 
-def _hold_landmarks(partner: np.ndarray, fixed: CheckedLandmarks | None) -> None:
+def _hold_landmarks(partner: np.ndarray, fixed: LandmarkPairs | None) -> None:
     """Set (in place) the user's landmark pairs and midline points in ``partner`` (N,)."""
     if fixed is not None:
         partner[fixed.left], partner[fixed.right], partner[fixed.midline] = fixed.right, fixed.left, fixed.midline
@@ -182,8 +182,8 @@ def _on_points(points: np.ndarray, corners: np.ndarray, weights: np.ndarray, fir
     return index, np.einsum("kj,kji->ki", weights[inside], points[corners[inside]])
 
 
-def as_landmarks(points: np.ndarray, pairs: AutomaticPairs, user: CheckedLandmarks | None,
-                 priority: float, coincident: float) -> tuple[np.ndarray, CheckedLandmarks]:
+def as_landmarks(points: np.ndarray, pairs: AutomaticPairs, user: LandmarkPairs | None,
+                 priority: float, coincident: float) -> tuple[np.ndarray, LandmarkPairs]:
     """The points the solve runs on ((N + k, 3): the vertices, then the k pair sides inside triangles) and the
     user's and the automatic pairs as checked landmarks on them (automatic pairs touching a landmark's vertex,
     or on a position another landmark holds, are left out); the user's weigh ``priority`` times more."""

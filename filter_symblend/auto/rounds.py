@@ -26,7 +26,8 @@ from scipy.sparse.csgraph import connected_components
 from ..core.geometry import reflection_across_plane
 from ..core.landmark_asymmetry import fit_mirror_plane
 from ..core.neighbourhoods import connecting_width, mean_nearest_spacing, pair_weights
-from ..core.symmetrize import CheckedLandmarks, SymmetrizationResult, check_landmarks, scaled_progress, solve
+from ..core.landmark_pairs import LandmarkPairs, check_landmarks
+from ..core.symmetrize import SymmetrizationResult, scaled_progress, solve
 from ..errors import DegenerateNeighbourhoodError, GeometryError, SymblendWarning, SymmetryNotFoundError
 from ..parameters import CORE, options_of
 from .config import DEFAULT, AutoConfig
@@ -39,7 +40,7 @@ from .pairs import Constraints, as_landmarks, find_pairs, spread
 from .surface import Outline, Surface, build_surface
 
 
-def _connected_options(points: np.ndarray, landmarks: CheckedLandmarks, options: dict) -> dict:
+def _connected_options(points: np.ndarray, landmarks: LandmarkPairs, options: dict) -> dict:
     """``options`` with `phi_width` raised, if needed, so that the pairs' weight graph is connected (the
     pieces of a mesh in several parts lie farther apart than the pairs on each)."""
     left = np.concatenate([points[landmarks.left], points[landmarks.midline]])
@@ -108,7 +109,7 @@ def _intrinsic_first_output(points, surface, core, scored, config, refusal, prog
     return result, tried
 
 
-def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, landmarks: CheckedLandmarks | None = None,
+def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, landmarks: LandmarkPairs | None = None,
                          excluded: np.ndarray | None = None, progress=None, config: AutoConfig = DEFAULT
                          ) -> SymmetrizationResult:
     """``pairs='auto'`` (``landmarks`` None) or ``'landmarks+auto'`` on checked ``points`` (N, 3) and

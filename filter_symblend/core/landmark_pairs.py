@@ -1,9 +1,5 @@
-"""Landmark pairs: decoding the per-vertex pair attribute and checking pairs against a mesh.
-
-Encoding of the attribute (default name ``symblend_pair``): +k on the left
-vertex of pair k, -k on the right vertex, 0 on every other vertex; k = 1..n in
-any order, gaps allowed.
-"""
+"""Landmark pairs, the one type every layer uses, and their checks against a mesh: each error names the
+argument, pair or vertex at fault."""
 
 from __future__ import annotations
 
@@ -20,9 +16,12 @@ FLAT_RATIO = 1e-6  # landmark spread below this fraction of the largest one coun
 
 @dataclasses.dataclass(frozen=True)
 class LandmarkPairs:
-    """n pairs of vertex indices: pair ``ids[k]`` joins ``left[k]`` (+k) and ``right[k]`` (-k);
-    ``midline`` (m,) holds the vertices of midline landmarks (on the symmetry plane);
-    ``left_weights``, ``right_weights`` (n,) in [0, 1], or None for all 1 (0: a missing side)."""
+    """The landmarks, in the one form every layer uses: n pairs of vertex indices, pair ``ids[k]`` (its
+    label in messages) joining ``left[k]`` (+k) and ``right[k]`` (-k); ``midline`` (m,) the vertices of
+    midline landmarks (on the symmetry plane); ``left_weights``, ``right_weights`` (n,) >= 0, how much each
+    landmark's input geometry counts (0: a missing side; above 1: a pair that counts more; all 1 when not
+    given). Readers (files, attributes, pairing) build them as found; :func:`check_landmarks` checks them
+    against a mesh, once, and everything after it trusts them."""
 
     ids: np.ndarray
     left: np.ndarray
@@ -31,53 +30,10 @@ class LandmarkPairs:
     left_weights: np.ndarray | None = None
     right_weights: np.ndarray | None = None
 
-
-def pairs_from_attribute(values: np.ndarray, attribute: str) -> LandmarkPairs:
-    """Decode the pair attribute ``values`` (N,) into pairs sorted by label k."""
-    values = np.asarray(values, dtype=float)
-    if not np.isfinite(values).all():
-        raise LandmarkError(
-            f"Attribute `{attribute}` is not finite at vertex {id_list(np.flatnonzero(~np.isfinite(values)))}; "
-            "set those vertices to 0 (no landmark) or to a pair label +k / -k."
-        )
-    labels = np.rint(values)
-    fractional = labels != values
-    if fractional.any():
-        v = np.flatnonzero(fractional)[0]
-        raise LandmarkError(
-            f"Attribute `{attribute}` holds {values[v]:g} at vertex {v}; pair labels are whole "
-            "numbers (+k on the left vertex, -k on the right one, 0 elsewhere)."
-        )
-    labels = labels.astype(np.int64)
-    sides = {}
-    for name, sign in (("left", 1), ("right", -1)):
-        vertices = np.flatnonzero(sign * labels > 0)
-        ids = sign * labels[vertices]
-        unique, counts = np.unique(ids, return_counts=True)
-        if (counts > 1).any():
-            k = unique[counts > 1][0]
-            raise LandmarkError(
-                f"Pair label {sign * k:+d} is used on {counts[unique == k][0]} vertices "
-                f"({id_list(np.flatnonzero(sign * labels == k))}) of attribute `{attribute}`; each label "
-                f"must appear once as +{k} and once as -{k}. Renumber the extra ones."
-            )
-        sides[name] = dict(zip(ids.tolist(), vertices.tolist()))
-    for here, there, sign in (("left", "right", 1), ("right", "left", -1)):
-        orphans = sorted(set(sides[here]) - set(sides[there]))
-        if orphans:
-            k = orphans[0]
-            raise LandmarkError(
-                f"Pair {k}: {sign * k:+d} on vertex {sides[here][k]} has no {-sign * k:+d} partner "
-                f"in attribute `{attribute}`"
-                + (f" (also unpaired: {', '.join(map(str, orphans[1:11]))})" if len(orphans) > 1 else "")
-                + f". Put {-sign * k:+d} on the {there} vertex, or set {sign * k:+d} to 0."
-            )
-    ids = np.array(sorted(sides["left"]), dtype=np.int64)
-    return LandmarkPairs(
-        ids,
-        np.array([sides["left"][k] for k in ids], dtype=np.int64),
-        np.array([sides["right"][k] for k in ids], dtype=np.int64),
-    )
+    def __post_init__(self):
+        for side in ("left_weights", "right_weights"):
+            if getattr(self, side) is None:
+                object.__setattr__(self, side, np.ones(len(self.ids)))
 
 
 def midline_labels(count: int) -> list[str]:
@@ -148,6 +104,46 @@ def check_pairs(points: np.ndarray, pairs: LandmarkPairs) -> None:
             "landmark; a landmark on the symmetry plane is not a pair."
         )
     _require_plane_and_warp(points, pairs)
+
+
+def _integer_indices(name: str, values) -> np.ndarray:
+    values = np.asarray(values).ravel()
+    if values.size and values.dtype.kind not in "iu":
+        raise LandmarkError(f"`{name}` must hold integer vertex indices, got {values.dtype} values.")
+    return values.astype(np.int64)
+
+
+def _landmark_weights(name: str, weights, count: int, ids) -> np.ndarray:
+    if weights is None:
+        return np.ones(count)
+    weights = np.asarray(weights, dtype=float).ravel()
+    if len(weights) != count:
+        raise LandmarkError(f"`{name}` must have one weight per pair ({count}), got {len(weights)}.")
+    bad = ~((weights >= 0) & (weights <= 1))
+    if bad.any():
+        raise LandmarkError(f"`{name}` must lie in [0, 1]; pair {ids[bad][0]} has {weights[bad][0]:g}. "
+                            "Use 0 for a missing or broken landmark, 1 for a sound one.")
+    return weights
+
+
+def check_landmarks(points: np.ndarray, left, right, pair_ids=None, midline=None, left_weights=None,
+                    right_weights=None) -> LandmarkPairs:
+    """The landmarks as :class:`LandmarkPairs`, or a LandmarkError / GeometryError naming the fault."""
+    left, right = _integer_indices("left", left), _integer_indices("right", right)
+    midline = _integer_indices("midline", [] if midline is None else midline)
+    ids = np.arange(1, len(left) + 1) if pair_ids is None else np.asarray(pair_ids).ravel()
+    if not (len(left) == len(right) == len(ids)):
+        raise LandmarkError(
+            f"`left`, `right` and `pair_ids` must have one entry per pair; got {len(left)}, "
+            f"{len(right)} and {len(ids)}.")
+    check_pairs(points, LandmarkPairs(ids, left, right, midline))
+    wl = _landmark_weights("left_weights", left_weights, len(left), ids)
+    wr = _landmark_weights("right_weights", right_weights, len(left), ids)
+    both_missing = (wl == 0) & (wr == 0)
+    if both_missing.any():
+        raise LandmarkError(f"Pair {ids[both_missing][0]} has weight 0 on both sides, so nothing "
+                            "says where it goes; give the sound side weight 1, or remove the pair.")
+    return LandmarkPairs(ids, left, right, midline, wl, wr)
 
 
 def _spread(positions: np.ndarray) -> np.ndarray:

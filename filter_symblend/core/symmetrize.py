@@ -1,5 +1,6 @@
-"""The paper's method on arrays: validate the landmarks, Step 1, Step 2, warp, report. No pymeshlab here,
-and nothing about where the pairs come from (automatic pairs are a layer above, ``filter_symblend.auto``)."""
+"""The paper's method on arrays, from checked landmarks (``landmark_pairs``): Step 1, Step 2, warp,
+report. No pymeshlab here, and nothing about where the pairs come from (automatic pairs are a layer
+above, ``filter_symblend.auto``)."""
 
 from __future__ import annotations
 
@@ -10,11 +11,11 @@ import warnings
 
 import numpy as np
 
-from ..errors import GeometryError, LandmarkError, SymblendWarning, id_list
+from ..errors import GeometryError, SymblendWarning, id_list
 from .geometry import flat_normal, minimal_rotation, normalize, rigid_fit
 from .global_solve import MINUS_X, global_solve
 from .landmark_asymmetry import fit_mirror_plane
-from .landmark_pairs import LandmarkPairs, check_pairs, midline_labels
+from .landmark_pairs import LandmarkPairs, midline_labels
 from .mirror_pairs import MirrorPairs
 from .local_symmetries import LocalSymmetries, local_symmetries
 from .neighbourhoods import mean_nearest_spacing, pair_weights, require_connected, scaled_weights
@@ -46,21 +47,6 @@ class SymmetrizationResult:
     report: dict[str, Any]
     mirror_pairs: MirrorPairs | None = None
     uncertainty: np.ndarray | None = None
-
-
-@dataclasses.dataclass(frozen=True)
-class CheckedLandmarks:
-    """Landmark pairs checked against the points: vertex indices ``left``, ``right`` (n,) and
-    ``midline`` (m,), labels ``ids`` (n,) for messages, and how much each landmark's input geometry
-    counts, ``left_weights``, ``right_weights`` (n,) >= 0 (0: a missing side; above 1: a pair that
-    counts more)."""
-
-    left: np.ndarray
-    right: np.ndarray
-    ids: np.ndarray
-    midline: np.ndarray
-    left_weights: np.ndarray
-    right_weights: np.ndarray
 
 
 def _rotated(local: LocalSymmetries, rotation: np.ndarray) -> LocalSymmetries:
@@ -115,26 +101,6 @@ def _summary(values: np.ndarray) -> dict[str, float]:
             "max": float(values.max())}
 
 
-def _integer_indices(name: str, values) -> np.ndarray:
-    values = np.asarray(values).ravel()
-    if values.size and values.dtype.kind not in "iu":
-        raise LandmarkError(f"`{name}` must hold integer vertex indices, got {values.dtype} values.")
-    return values.astype(np.int64)
-
-
-def _landmark_weights(name: str, weights, count: int, ids) -> np.ndarray:
-    if weights is None:
-        return np.ones(count)
-    weights = np.asarray(weights, dtype=float).ravel()
-    if len(weights) != count:
-        raise LandmarkError(f"`{name}` must have one weight per pair ({count}), got {len(weights)}.")
-    bad = ~((weights >= 0) & (weights <= 1))
-    if bad.any():
-        raise LandmarkError(f"`{name}` must lie in [0, 1]; pair {ids[bad][0]} has {weights[bad][0]:g}. "
-                            "Use 0 for a missing or broken landmark, 1 for a sound one.")
-    return weights
-
-
 def _report_progress(progress, percent: float, message: str) -> None:
     if progress is not None:
         progress(percent, message)
@@ -160,7 +126,7 @@ class LandmarkTargets:
     theta_h: float
 
 
-def landmark_targets(points: np.ndarray, landmarks: CheckedLandmarks, options: dict, progress=None,
+def landmark_targets(points: np.ndarray, landmarks: LandmarkPairs, options: dict, progress=None,
                      warn: bool = False, clock: dict | None = None) -> LandmarkTargets:
     """Step 1 and Step 2 (the paper's local symmetries and their blend) for checked ``landmarks`` on
     ``points`` (N, 3), with validated core ``options``; ``warn``: warn about pairs that look swapped or
@@ -217,7 +183,7 @@ def landmark_targets(points: np.ndarray, landmarks: CheckedLandmarks, options: d
                            measured_spacing, spacing, phi_h, theta_h)
 
 
-def solve(points: np.ndarray, landmarks: CheckedLandmarks, options: dict, progress=None,
+def solve(points: np.ndarray, landmarks: LandmarkPairs, options: dict, progress=None,
           warn: bool = True) -> SymmetrizationResult:
     """Step 1, Step 2 and the warp for checked ``landmarks`` on ``points`` (N, 3), with validated core
     ``options``; ``warn``: warn about pairs that look swapped or are poor mirror images."""
@@ -290,26 +256,6 @@ def solve(points: np.ndarray, landmarks: CheckedLandmarks, options: dict, progre
         previous = clock[stage]
     report["seconds"]["total"] = previous - clock["start"]
     return SymmetrizationResult(warped, asymmetry, report)
-
-
-def check_landmarks(points: np.ndarray, left, right, pair_ids=None, midline=None, left_weights=None,
-                    right_weights=None) -> CheckedLandmarks:
-    """The landmarks as :class:`CheckedLandmarks`, or a LandmarkError / GeometryError naming the fault."""
-    left, right = _integer_indices("left", left), _integer_indices("right", right)
-    midline = _integer_indices("midline", [] if midline is None else midline)
-    ids = np.arange(1, len(left) + 1) if pair_ids is None else np.asarray(pair_ids).ravel()
-    if not (len(left) == len(right) == len(ids)):
-        raise LandmarkError(
-            f"`left`, `right` and `pair_ids` must have one entry per pair; got {len(left)}, "
-            f"{len(right)} and {len(ids)}.")
-    check_pairs(points, LandmarkPairs(ids, left, right, midline))
-    wl = _landmark_weights("left_weights", left_weights, len(left), ids)
-    wr = _landmark_weights("right_weights", right_weights, len(left), ids)
-    both_missing = (wl == 0) & (wr == 0)
-    if both_missing.any():
-        raise LandmarkError(f"Pair {ids[both_missing][0]} has weight 0 on both sides, so nothing "
-                            "says where it goes; give the sound side weight 1, or remove the pair.")
-    return CheckedLandmarks(left, right, ids, midline, wl, wr)
 
 
 def scaled_progress(progress, start: float, width: float):

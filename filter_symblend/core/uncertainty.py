@@ -24,9 +24,9 @@ import numpy as np
 
 from ..errors import GeometryError, SymblendError
 from .geometry import rigid_fit
-from .landmark_pairs import midline_labels
+from .landmark_pairs import LandmarkPairs, midline_labels
 from .splines import thin_plate_spline
-from .symmetrize import CheckedLandmarks, LandmarkTargets, landmark_targets
+from .symmetrize import LandmarkTargets, landmark_targets
 
 EVALUATED_VALUES = 2**24  # vertices x columns per evaluation of the changes (128 MB of float64)
 
@@ -53,11 +53,11 @@ class Uncertainty:
                 "kept_in": self.kept_in}
 
 
-def _without(landmarks: CheckedLandmarks, pair: int | None, midline: int | None) -> CheckedLandmarks:
+def _without(landmarks: LandmarkPairs, pair: int | None, midline: int | None) -> LandmarkPairs:
     keep = np.arange(len(landmarks.left)) != pair
-    return CheckedLandmarks(landmarks.left[keep], landmarks.right[keep], landmarks.ids[keep],
-                            np.delete(landmarks.midline, [] if midline is None else [midline]),
-                            landmarks.left_weights[keep], landmarks.right_weights[keep])
+    return LandmarkPairs(landmarks.ids[keep], landmarks.left[keep], landmarks.right[keep],
+                         np.delete(landmarks.midline, [] if midline is None else [midline]),
+                         landmarks.left_weights[keep], landmarks.right_weights[keep])
 
 
 def _target_change(points: np.ndarray, full: LandmarkTargets, reduced: LandmarkTargets) -> np.ndarray:
@@ -76,7 +76,7 @@ def _target_change(points: np.ndarray, full: LandmarkTargets, reduced: LandmarkT
     return changed - full.target
 
 
-def jackknife(points: np.ndarray, landmarks: CheckedLandmarks, options: dict, full: LandmarkTargets) -> Uncertainty:
+def jackknife(points: np.ndarray, landmarks: LandmarkPairs, options: dict, full: LandmarkTargets) -> Uncertainty:
     """The jackknife of the restoration of ``points`` (N, 3) from checked ``landmarks`` with core
     ``options``, whose full Steps 1 and 2 are ``full``; see the module doc."""
     labels = [str(i) for i in landmarks.ids] + list(midline_labels(len(landmarks.midline)))

@@ -15,8 +15,8 @@ import dataclasses
 import numpy as np
 import pymeshlab
 
-from ..core.landmark_pairs import LandmarkPairs, pairs_from_attribute
-from ..errors import LandmarkError
+from ..core.landmark_pairs import LandmarkPairs
+from ..errors import LandmarkError, id_list
 from ..parameters import DEFAULTS
 
 
@@ -64,6 +64,54 @@ def write_landmark_attributes(mesh: pymeshlab.Mesh, pairs: LandmarkPairs, left_w
         weights[pairs.left] = 1.0 if left_weights is None else left_weights
         weights[pairs.right] = 1.0 if right_weights is None else right_weights
         mesh.add_vertex_custom_scalar_attribute(weights, weight_attribute)
+
+
+def pairs_from_attribute(values: np.ndarray, attribute: str) -> LandmarkPairs:
+    """Decode the pair attribute ``values`` (N,) into pairs sorted by label k."""
+    values = np.asarray(values, dtype=float)
+    if not np.isfinite(values).all():
+        raise LandmarkError(
+            f"Attribute `{attribute}` is not finite at vertex {id_list(np.flatnonzero(~np.isfinite(values)))}; "
+            "set those vertices to 0 (no landmark) or to a pair label +k / -k."
+        )
+    labels = np.rint(values)
+    fractional = labels != values
+    if fractional.any():
+        v = np.flatnonzero(fractional)[0]
+        raise LandmarkError(
+            f"Attribute `{attribute}` holds {values[v]:g} at vertex {v}; pair labels are whole "
+            "numbers (+k on the left vertex, -k on the right one, 0 elsewhere)."
+        )
+    labels = labels.astype(np.int64)
+    sides = {}
+    for name, sign in (("left", 1), ("right", -1)):
+        vertices = np.flatnonzero(sign * labels > 0)
+        ids = sign * labels[vertices]
+        unique, counts = np.unique(ids, return_counts=True)
+        if (counts > 1).any():
+            k = unique[counts > 1][0]
+            raise LandmarkError(
+                f"Pair label {sign * k:+d} is used on {counts[unique == k][0]} vertices "
+                f"({id_list(np.flatnonzero(sign * labels == k))}) of attribute `{attribute}`; each label "
+                f"must appear once as +{k} and once as -{k}. Renumber the extra ones."
+            )
+        sides[name] = dict(zip(ids.tolist(), vertices.tolist()))
+    for here, there, sign in (("left", "right", 1), ("right", "left", -1)):
+        orphans = sorted(set(sides[here]) - set(sides[there]))
+        if orphans:
+            k = orphans[0]
+            raise LandmarkError(
+                f"Pair {k}: {sign * k:+d} on vertex {sides[here][k]} has no {-sign * k:+d} partner "
+                f"in attribute `{attribute}`"
+                + (f" (also unpaired: {', '.join(map(str, orphans[1:11]))})" if len(orphans) > 1 else "")
+                + f". Put {-sign * k:+d} on the {there} vertex, or set {sign * k:+d} to 0."
+            )
+    ids = np.array(sorted(sides["left"]), dtype=np.int64)
+    return LandmarkPairs(
+        ids,
+        np.array([sides["left"][k] for k in ids], dtype=np.int64),
+        np.array([sides["right"][k] for k in ids], dtype=np.int64),
+    )
 
 
 def read_landmark_attributes(mesh: pymeshlab.Mesh, pair_attribute: str = DEFAULTS["pair_attribute"],

@@ -11,8 +11,7 @@ import dataclasses
 import numpy as np
 
 from ..auto import DEFAULT, AutoConfig
-from ..core.landmark_pairs import check_points
-from ..core.symmetrize import CheckedLandmarks, check_landmarks
+from ..core.landmark_pairs import LandmarkPairs, check_landmarks, check_points
 from ..errors import LandmarkError, ParameterError
 
 MINIMUM_UNITS = 3  # landmark pairs and midline landmarks the jackknife needs: each left out leaves two
@@ -28,7 +27,7 @@ class Problem:
 
     points: np.ndarray
     faces: np.ndarray
-    landmarks: CheckedLandmarks | None
+    landmarks: LandmarkPairs | None
     options: dict
     excluded: np.ndarray | None
     missing: np.ndarray | None
