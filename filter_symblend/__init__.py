@@ -26,7 +26,7 @@ _MESHLAB_NAMES = {  # loaded on first use, with pymeshlab
     "ASYMMETRY_ATTRIBUTE": "meshset_filter", "CONFIDENCE_ATTRIBUTE": "meshset_filter",
     "DISPLAY_NAME": "meshset_filter", "FILTER_NAME": "meshset_filter", "TWIN_ATTRIBUTE": "meshset_filter",
     "UNCERTAINTY_ATTRIBUTE": "meshset_filter", "generate_symmetrized_mesh": "meshset_filter",
-    "ScriptError": "mlx", "apply_filter_script": "script_runner", "save_filter_script": "script_runner",
+    "ScriptError": "filter_script", "apply_filter_script": "script_runner", "save_filter_script": "script_runner",
 }
 
 __all__ = [

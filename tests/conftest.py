@@ -12,6 +12,7 @@ import pytest
 
 from filter_symblend.testing import synthetic
 from filter_symblend.testing.remeshing import remeshed
+from filter_symblend.testing.surface_truth import SurfaceTruth
 
 SAMPLE_MESHES = pathlib.Path(pymeshlab.__file__).parent / "tests" / "sample_meshes"
 SHARED_DATA = pathlib.Path(__file__).resolve().parents[1].parent / "shared" / "data"
@@ -63,7 +64,7 @@ def symmetric_mesh(request) -> GroundTruth:
     return load_ground_truth(path)
 
 
-def remeshed_ground_truth(path: os.PathLike, edge_percent: float) -> synthetic.SurfaceTruth:
+def remeshed_ground_truth(path: os.PathLike, edge_percent: float) -> SurfaceTruth:
     """The exactly symmetric mesh at ``path`` remeshed (edges ``edge_percent`` % of the diagonal): no vertex
     has an exact twin."""
     truth = load_ground_truth(path)
@@ -71,7 +72,7 @@ def remeshed_ground_truth(path: os.PathLike, edge_percent: float) -> synthetic.S
 
 
 @pytest.fixture(scope="session")
-def remeshed_cow() -> synthetic.SurfaceTruth:
+def remeshed_cow() -> SurfaceTruth:
     return remeshed_ground_truth(SAMPLE_MESHES / "cow.obj", 2.0)
 
 

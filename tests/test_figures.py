@@ -106,7 +106,7 @@ def _scan(amplitude: float, bend: float):
 
 def test_an_input_symmetric_within_a_scans_noise_comes_back_unchanged_unless_symmetrizing_helps(tmp_path):
     from filter_symblend import save_filter_script
-    from filter_symblend.meshlab.mlx import read_filter_script
+    from filter_symblend.meshlab.filter_script import read_filter_script
     ms = _scan(2e-4, 0.0)
     report = ms.generate_symmetrized_mesh()
     save_filter_script(ms, tmp_path / "pipeline.mlx")  # the layer built again is still one call of the filter

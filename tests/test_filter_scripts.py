@@ -9,7 +9,7 @@ import pytest
 import filter_symblend
 from filter_symblend import DISPLAY_NAME, PARAMETERS, ScriptError, apply_filter_script, save_filter_script
 from filter_symblend.testing import synthetic
-from filter_symblend.meshlab.mlx import read_filter_script, symblend_options
+from filter_symblend.meshlab.filter_script import read_filter_script, symblend_options
 from filter_symblend.checks.surface_asymmetry import mirror_distances
 from conftest import meshset_with_pairs
 

@@ -8,7 +8,7 @@ import sys
 import warnings
 
 from ..errors import SymblendError, SymblendWarning
-from ..meshlab.mlx import read_filter_script, symblend_options
+from ..meshlab.filter_script import read_filter_script, symblend_options
 from ..meshlab.script_runner import apply_filter_script
 from ..parameters import DEFAULTS
 from .console import progress_display

@@ -29,62 +29,12 @@ from ..errors import MeshSetError, ParameterError, SymblendWarning
 from ..parameters import keyword_signature, parameters_doc, validate_parameters
 from ..pipeline import build_problem, solve_problem
 from .attributes import optional_attribute, read_landmark_attributes
+from .output_layer import (ASYMMETRY_ATTRIBUTE, CONFIDENCE_ATTRIBUTE, TWIN_ATTRIBUTE, UNCERTAINTY_ATTRIBUTE,
+                           add_output_layer)
 
 FILTER_NAME = "generate_symmetrized_mesh"
 DISPLAY_NAME = "Symmetrize: Closed-form Blending of Local Symmetries"
-ASYMMETRY_ATTRIBUTE = "symblend_asymmetry"
-TWIN_ATTRIBUTE = "symblend_twin"  # per-vertex point: the vertex's mirror twin on the output (NaN: none)
-CONFIDENCE_ATTRIBUTE = "symblend_pair_confidence"  # per-vertex scalar in [0, 1] (0: no twin)
-UNCERTAINTY_ATTRIBUTE = "symblend_uncertainty"  # per-vertex scalar: jackknife standard error, mesh units
 WRITTEN = (ASYMMETRY_ATTRIBUTE, TWIN_ATTRIBUTE, CONFIDENCE_ATTRIBUTE, UNCERTAINTY_ATTRIBUTE)
-_SCRATCH = ("symblend_scratch_x", "symblend_scratch_y", "symblend_scratch_z",
-            "symblend_scratch_quality")
-
-
-def _add_output_layer(ms: pymeshlab.MeshSet, input_id: int, result, carried: dict,
-                      pending: list[Future] = ()) -> int:
-    """Add the output layer; the id of the new layer. ``pending``: work running beside it, waited for
-    too; if it fails, the layer is removed as for a failure of its own."""
-    created = []
-    try:
-        ms.set_current_mesh(input_id)
-        label = ms.current_mesh().label()
-        ms.generate_copy_of_current_mesh()
-        created.append(ms.current_mesh_id())
-        scratch = ms.current_mesh()
-        for name, values in zip(_SCRATCH, [*result.points.T, result.asymmetry]):
-            scratch.add_vertex_custom_scalar_attribute(values, name)
-        ms.compute_coord_by_function(x=_SCRATCH[0], y=_SCRATCH[1], z=_SCRATCH[2], onselected=False)
-        ms.compute_scalar_by_function_per_vertex(q=_SCRATCH[3], onselected=False)
-        ms.generate_copy_of_current_mesh()
-        created.append(ms.current_mesh_id())
-        output = ms.current_mesh()
-        output.add_vertex_custom_scalar_attribute(result.asymmetry, ASYMMETRY_ATTRIBUTE)
-        for name, values in carried.items():
-            output.add_vertex_custom_scalar_attribute(values, name)
-        if result.mirror_pairs is not None:  # automatic pairs: the map they came from, on the output
-            twin, confidence = result.mirror_pairs.per_vertex(result.points)
-            output.add_vertex_custom_point_attribute(twin, TWIN_ATTRIBUTE)
-            output.add_vertex_custom_scalar_attribute(confidence, CONFIDENCE_ATTRIBUTE)
-        if result.uncertainty is not None:
-            output.add_vertex_custom_scalar_attribute(result.uncertainty, UNCERTAINTY_ATTRIBUTE)
-        if not output.is_point_cloud():
-            ms.compute_normal_per_face()
-            ms.compute_normal_per_vertex()
-        output.set_label(f"{label}_symmetrized")
-        output_id = created[1]
-        ms.set_current_mesh(created.pop(0))
-        ms.delete_current_mesh()
-        ms.set_current_mesh(output_id)
-        for work in pending:
-            work.result()
-        return output_id
-    except BaseException:
-        for mesh_id in created:
-            ms.set_current_mesh(mesh_id)
-            ms.delete_current_mesh()
-        ms.set_current_mesh(input_id)
-        raise
 
 
 def _missing_region(mesh: pymeshlab.Mesh, region: str, weight_attribute: str):
@@ -247,19 +197,19 @@ def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict |
     carried = {name: values for name in names if (values := optional_attribute(mesh, name)) is not None}
     if result is not None:
         with recording.recorded_call(ms, options):  # our native steps, saved as one node of ours
-            output_id = _add_output_layer(ms, input_id, result, carried)
+            output_id = add_output_layer(ms, input_id, result, carried)
     else:
         check_seconds = {}
         with ThreadPoolExecutor(max_workers=1) as pool:
             result, checks = _compute(mesh, options, progress, pool, check_seconds)
             with recording.recorded_call(ms, options):
-                output_id = _add_output_layer(ms, input_id, result, carried, list(checks.values()))
+                output_id = add_output_layer(ms, input_id, result, carried, list(checks.values()))
                 unchanged = _needs_nothing(checks, result.report.get("landmark_asymmetry_before"))
                 if unchanged:  # rare: the layer is built again from the input rather than wait for the checks
                     result = _the_input(result, ms.mesh(input_id).vertex_matrix(), options["output_frame"])
                     ms.set_current_mesh(output_id)
                     ms.delete_current_mesh()
-                    output_id = _add_output_layer(ms, input_id, result, carried)
+                    output_id = add_output_layer(ms, input_id, result, carried)
         result.report.update({name: check.result() for name, check in checks.items()})
         result.report["seconds"]["checks"] = check_seconds
         if "mirror_asymmetry_after" in result.report:

@@ -15,10 +15,9 @@ import pymeshlab
 from ..errors import MeshSetError, SymblendError
 from .meshset_clone import clone_meshset
 from .meshset_filter import DISPLAY_NAME, run_filter
-from .mlx import (
-    FilterNode, NativeCall, ScriptError, native_call, node_from_element, read_filter_script, symblend_node,
-    symblend_options, write_filter_script
-)
+from .filter_script import (FilterNode, ScriptError, node_from_element, read_filter_script, symblend_node,
+                            symblend_options, write_filter_script)
+from .native_calls import NativeCall, native_call
 from .recording import recorded_calls, recorded_native_script
 
 

@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pymeshlab
 
-from . import synthetic
+from .surface_truth import SurfaceTruth, surface_truth
 
 
-def remeshed(points: np.ndarray, faces: np.ndarray, offset: float, edge_percent: float) -> synthetic.SurfaceTruth:
+def remeshed(points: np.ndarray, faces: np.ndarray, offset: float, edge_percent: float) -> SurfaceTruth:
     """The mesh (``points`` (N, 3), ``faces`` (F, 3), symmetric across x = ``offset``) remeshed isotropically
     with edges ``edge_percent`` % of the diagonal, and its true twins. One side's triangles are split first
     (the surface unchanged) and no crease is kept, so that no vertex keeps an exact twin."""
@@ -22,4 +22,4 @@ def remeshed(points: np.ndarray, faces: np.ndarray, offset: float, edge_percent:
                                             featuredeg=180.0)
     ms.meshing_remove_unreferenced_vertices()
     mesh = ms.current_mesh()
-    return synthetic.surface_truth(mesh.vertex_matrix(), mesh.face_matrix(), offset)
+    return surface_truth(mesh.vertex_matrix(), mesh.face_matrix(), offset)

@@ -13,14 +13,15 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from filter_symblend import SymblendError, symmetrize
-from filter_symblend.testing import synthetic
 from filter_symblend.checks.hausdorff import two_way_distance
 from filter_symblend.checks.surface_asymmetry import mirror_distances
 from filter_symblend.core.geometry import flat_normal, reflection_across_plane, voxel_grid
 from filter_symblend.core.mesh_graph import vertex_adjacency
 from filter_symblend.core.mirror_fill import distances_to_surface
 from filter_symblend.core.mirror_planes import fit_surface_mirror_plane
+from filter_symblend.testing import synthetic
 from filter_symblend.testing.remeshing import remeshed
+from filter_symblend.testing.surface_truth import vertex_truth
 
 from .common import EXACT, MESHES, SAMPLES, SHARED, load, quiet, referenced
 
@@ -96,12 +97,12 @@ def corpus_cases():
     for name in ("cow", "spot"):
         if MESHES[name].exists():
             points, offset, _, left, right, faces = load(MESHES[name])
-            truths += [(name, synthetic.vertex_truth(points, faces, left, right)),
+            truths += [(name, vertex_truth(points, faces, left, right)),
                        (f"{name} remeshed", remeshed(points, faces, offset, REMESHED_EDGE))]
     pieces_points, pieces_faces = synthetic.several_pieces(3)
     offset, partner = synthetic.mirror_partners(pieces_points)
     left = np.flatnonzero((partner >= 0) & (pieces_points[:, 0] > offset))
-    truths.append(("several pieces", synthetic.vertex_truth(pieces_points, pieces_faces, left, partner[left])))
+    truths.append(("several pieces", vertex_truth(pieces_points, pieces_faces, left, partner[left])))
     for name, truth in truths:
         deformations = list(CORPUS_DEFORMATIONS)
         mesh = name.split()[0]
