@@ -5,20 +5,21 @@ Symmetries* (SGP 2010). Importing the package binds
 ``pymeshlab.MeshSet.generate_symmetrized_mesh`` (now if pymeshlab is loaded,
 else as soon as it is); ``apply_filter_script`` and ``save_filter_script``
 run and record MeshLab filter scripts that use it. The array API
-(``symmetrize``, and everything under core/, landmarks/, checks/, auto/ and
-pipeline/) imports and runs without pymeshlab, and does not load it.
+(``symmetrize`` and ``find_mirror_pairs`` from api.py, and everything under
+core/, landmarks/, measures/, auto/ and pipeline/) imports and runs without
+pymeshlab, and does not load it.
 """
 
 import importlib
 
 from .core.mirror_pairs import MirrorPairs
-from .core.symmetrize import SymmetrizationResult
+from .core.solve import SymmetrizationResult
 from .errors import (GeometryError, LandmarkError, MeshSetError, ParameterError, SymblendError,
                      SymblendWarning, SymmetryNotFoundError)
 from .landmarks.from_file import pairs_from_landmark_file
 from .meshlab.when_imported import bind_when_pymeshlab_imported
 from .parameters import PARAMETERS
-from .pipeline import find_mirror_pairs, symmetrize
+from .api import find_mirror_pairs, symmetrize
 
 bind_when_pymeshlab_imported()
 

@@ -18,7 +18,7 @@ from filter_symblend.testing import synthetic
 from filter_symblend.auto.twins import find_twins
 from filter_symblend.core.mesh_quantities import mean_spacing, vertex_normals
 from filter_symblend.core.mirror_fill import closest_points_on_surface
-from filter_symblend.checks.surface_asymmetry import mirror_asymmetry
+from filter_symblend.measures.surface_asymmetry import mirror_asymmetry
 
 from conftest import SAMPLE_MESHES, SHARED_DATA, load_ground_truth, meshset_with_pairs, symmetric_blob, twins
 
@@ -300,7 +300,7 @@ def test_a_singular_system_is_an_error_not_a_non_finite_output(blob, monkeypatch
     """Whatever goes wrong inside the solve (here the global solve is made to return NaN), the caller gets
     a GeometryError, for landmarks and automatic pairs alike, never NaN coordinates."""
     from importlib import import_module
-    core = import_module("filter_symblend.core.symmetrize")
+    core = import_module("filter_symblend.core.solve")
     points, faces = blob
     original = core.global_solve
 

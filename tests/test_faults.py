@@ -106,12 +106,12 @@ def test_too_little_free_space_is_refused_before_any_work(sphere_file, tmp_path,
     """The outputs need room for the mesh (up to 4x its input file) and the report; a folder with less is refused
     before anything is computed or written, naming the folder, what is free and what is needed."""
     import collections
-    from filter_symblend.commands import files
+    from filter_symblend.commands import mesh_io
     usage = collections.namedtuple("usage", "total used free")
     needed = 4 * sphere_file.stat().st_size + 2**20  # the mesh and the report
     output, report = tmp_path / "out.ply", tmp_path / "out.json"
     for free, status in ((needed - 1, 1), (needed, 0)):
-        monkeypatch.setattr(files.shutil, "disk_usage", lambda folder, free=free: usage(10 * needed, 0, free))
+        monkeypatch.setattr(mesh_io.shutil, "disk_usage", lambda folder, free=free: usage(10 * needed, 0, free))
         assert main(["symmetrize", str(sphere_file), "--pairs", "auto", "-o", str(output), "--report", str(report)]) \
             == status
         if status:

@@ -270,7 +270,7 @@ def _skull_like_landmarks(cow, pair_count: int):
 
 @pytest.mark.parametrize("mode", ["standard", "affine", "articulated"])
 def test_three_pairs_and_four_midline_landmarks_are_enough_in_every_mode(cow, mode):
-    from filter_symblend.checks.surface_asymmetry import mirror_asymmetry
+    from filter_symblend.measures.surface_asymmetry import mirror_asymmetry
     left, right, midline = _skull_like_landmarks(cow, 3)
     deformed = synthetic.random_rigid(synthetic.compress(synthetic.bend(cow.points, 0.3), [1, 1, 0], 0.85), seed=3)
     result = symmetrize(deformed, left, right, midline=midline, mode=mode)
@@ -284,7 +284,7 @@ def test_three_pairs_and_four_midline_landmarks_are_enough_in_every_mode(cow, mo
 
 @pytest.mark.auto
 def test_two_pairs_and_midline_landmarks_start_automatic_pairs(cow):
-    from filter_symblend.checks.surface_asymmetry import mirror_asymmetry
+    from filter_symblend.measures.surface_asymmetry import mirror_asymmetry
     left, right, midline = _skull_like_landmarks(cow, 2)
     deformed = synthetic.random_rigid(synthetic.bend(cow.points, 0.4), seed=3)
     result = symmetrize(deformed, left, right, midline=midline, faces=cow.faces, pairs="landmarks+auto")

@@ -17,7 +17,7 @@ from filter_symblend.auto.rounds import plane_asymmetry, surface_asymmetry
 from filter_symblend.auto.surface import build_surface
 from filter_symblend.core.mirror_planes import surface_mirror_planes
 from filter_symblend.core.landmark_pairs import check_landmarks
-from filter_symblend.core.symmetrize import solve
+from filter_symblend.core.solve import solve
 from conftest import SAMPLE_MESHES, symmetric_blob, twins
 
 pytestmark = pytest.mark.auto

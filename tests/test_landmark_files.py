@@ -6,7 +6,7 @@ import pytest
 
 from filter_symblend import SymblendWarning
 from filter_symblend.landmarks.curves import find_curves
-from filter_symblend.landmarks.files import (FORMATS, Landmark, LandmarkFileError, LandmarkSet, read_landmarks,
+from filter_symblend.landmarks.formats import (FORMATS, Landmark, LandmarkFileError, LandmarkSet, read_landmarks,
                                             write_landmarks)
 
 SAMPLE = LandmarkSet([
@@ -215,7 +215,7 @@ def test_missing_landmarks_as_the_field_writes_them(tmp_path, suffix, template, 
 
 
 def test_a_whole_study_written_as_one_tps_file_reads_back_by_id(tmp_path):
-    from filter_symblend.landmarks.files import write_tps_study
+    from filter_symblend.landmarks.formats import write_tps_study
     path = tmp_path / "study.tps"
     second = LandmarkSet([Landmark("a", (1.0, 2.0, 3.0)), Landmark("b", (0.0, 0.0, 0.0), placed=False)])
     write_tps_study(path, {"skull-1": SAMPLE, "skull-2": second})

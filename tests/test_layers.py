@@ -64,7 +64,7 @@ def test_the_array_floors_do_not_load_pymeshlab():
         import sys
         import filter_symblend.core
         assert "pymeshlab" not in sys.modules
-        import filter_symblend, filter_symblend.pipeline, filter_symblend.auto, filter_symblend.checks
+        import filter_symblend, filter_symblend.api, filter_symblend.pipeline, filter_symblend.auto, filter_symblend.measures
         assert "pymeshlab" not in sys.modules
     """)
 

@@ -185,7 +185,7 @@ def test_checks_measure_each_surface_against_its_reflection(bent_cow_meshset, co
 
 def test_mirror_asymmetry_on_a_sample_estimates_all_vertices(cow):
     """The report's sample of evenly strided vertices gives the mean and RMS of all of them closely."""
-    from filter_symblend.checks.surface_asymmetry import mirror_asymmetry
+    from filter_symblend.measures.surface_asymmetry import mirror_asymmetry
     bent = synthetic.bend(cow.points, 0.6)
     plane = (np.array([1.0, 0.0, 0.0]), cow.offset)
     every, sample = (mirror_asymmetry(bent, cow.faces, plane=plane, samples=count) for count in (None, 1000))

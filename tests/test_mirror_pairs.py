@@ -134,7 +134,7 @@ def test_pairs_written_as_landmarks_are_true_twins_and_read_back_unedited(bent_b
     `symblend symmetrize -l` pairs them by name; the mesh made from them is more symmetric than the input."""
     from scipy.spatial import cKDTree
     from filter_symblend.commands.main import main
-    from filter_symblend.landmarks.files import read_landmarks
+    from filter_symblend.landmarks.formats import read_landmarks
     path, points, faces, true_twin = bent_blob_file
     output = tmp_path / f"pairs{suffix}"
     assert main(["pairs", str(path), "-o", str(output), "--count", "12", "--mode", "articulated"]) == 0
@@ -216,7 +216,7 @@ def _summary(p90: float) -> dict:
 ])
 def test_a_worse_result_names_the_fix_of_the_run_it_was(landmark_pairs, automatic, fix):
     """Advice about landmark pairs only where there are landmark pairs."""
-    from filter_symblend.checks.verdict import result_warnings
+    from filter_symblend.measures.verdict import result_warnings
     message, = result_warnings(_summary(1.0), _summary(2.0), landmark_pairs=landmark_pairs, automatic=automatic)
     assert message.startswith("the output is more asymmetric than the input: 90th percentile 1 % -> 2 %")
     assert fix in message

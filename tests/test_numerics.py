@@ -177,7 +177,7 @@ def test_global_solve_reproduces_a_globally_affine_input_exactly():
     local = local_symmetries("affine", pair_weights(p, q, 2.0), p, q, np.arange(1, 31))
     frame = minimal_rotation(local.normals[:1], MINUS_X)[0]
     s_matrix = local.left_transforms[0]
-    from filter_symblend.core.symmetrize import _rotated
+    from filter_symblend.core.solve import _rotated
     r, s = global_solve(phi, p @ frame.T, q @ frame.T, _rotated(local, frame), alpha=0.01)
     expected = np.vstack([p, q]) @ (frame @ s_matrix).T
     expected -= expected.mean(axis=0) * [0, 1, 1]

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from filter_symblend import LandmarkError, SymblendWarning
-from filter_symblend.landmarks.files import Landmark, LandmarkFileError, LandmarkSet
+from filter_symblend.landmarks.formats import Landmark, LandmarkFileError, LandmarkSet
 from filter_symblend.meshlab.attributes import pair_labels
 from filter_symblend.landmarks.pairing import pair_by_name, read_pair_table, snap_pairs
 

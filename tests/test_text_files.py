@@ -7,7 +7,7 @@ import codecs
 import pytest
 
 from filter_symblend.commands.batch import read_manifest
-from filter_symblend.landmarks.files import LandmarkFileError, read_landmarks
+from filter_symblend.landmarks.formats import LandmarkFileError, read_landmarks
 from filter_symblend.landmarks.pairing import read_pair_table
 
 NAMES = ["L_orbitale", "R_orbitale", "nasion"]

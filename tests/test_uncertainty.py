@@ -14,7 +14,7 @@ from filter_symblend.commands.main import main
 from filter_symblend.core import uncertainty
 from filter_symblend.core.geometry import rigid_fit
 from filter_symblend.core.landmark_pairs import check_landmarks
-from filter_symblend.landmarks.files import Landmark, LandmarkSet, write_landmarks
+from filter_symblend.landmarks.formats import Landmark, LandmarkSet, write_landmarks
 from filter_symblend.meshlab.attributes import optional_attribute
 from filter_symblend.meshlab.ply_attributes import read_ply_vertex_properties
 from filter_symblend.parameters import CORE, DEFAULTS, options_of

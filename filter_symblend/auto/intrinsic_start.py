@@ -33,7 +33,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..core.mirror_pairs import spread_left_sides
-from ..core.symmetrize import SymmetrizationResult
+from ..core.solve import SymmetrizationResult
 from ..errors import SymblendError
 from .config import AutoConfig
 from .spectral import (eigenbasis, heat_kernel_signatures, mirror_functional_map, point_map, reversed_share,

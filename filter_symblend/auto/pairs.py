@@ -17,7 +17,7 @@ surface are dropped, and the share kept of those that landed is the round's ``co
   off along the surface, an error the solve then makes symmetric.
 
 Vertices whose twin is themselves (within half the local vertex spacing) are midline points. The pairs
-go through :func:`~filter_symblend.core.symmetrize.check_landmarks`, the same checks as a user's.
+go through :func:`~filter_symblend.core.solve.check_landmarks`, the same checks as a user's.
 """
 
 from __future__ import annotations

@@ -27,7 +27,7 @@ from ..core.geometry import reflection_across_plane
 from ..core.landmark_asymmetry import fit_mirror_plane
 from ..core.neighbourhoods import connecting_width, mean_nearest_spacing, pair_weights
 from ..core.landmark_pairs import LandmarkPairs, check_landmarks
-from ..core.symmetrize import SymmetrizationResult, scaled_progress, solve
+from ..core.solve import SymmetrizationResult, scaled_progress, solve
 from ..errors import DegenerateNeighbourhoodError, GeometryError, SymblendWarning, SymmetryNotFoundError
 from ..parameters import CORE, options_of
 from .config import DEFAULT, AutoConfig
@@ -109,9 +109,9 @@ def _intrinsic_first_output(points, surface, core, scored, config, refusal, prog
     return result, tried
 
 
-def symmetrize_automatic(points: np.ndarray, faces: np.ndarray, options: dict, landmarks: LandmarkPairs | None = None,
-                         excluded: np.ndarray | None = None, progress=None, config: AutoConfig = DEFAULT
-                         ) -> SymmetrizationResult:
+def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: dict,
+                               landmarks: LandmarkPairs | None = None, excluded: np.ndarray | None = None,
+                               progress=None, config: AutoConfig = DEFAULT) -> SymmetrizationResult:
     """``pairs='auto'`` (``landmarks`` None) or ``'landmarks+auto'`` on checked ``points`` (N, 3) and
     ``faces`` (F, 3) (empty: a point cloud) with validated ``options``. ``excluded`` (k,): vertices no
     automatic pair may use, nor pair with (a missing or broken part)."""

@@ -25,9 +25,9 @@ from threadpoolctl import threadpool_limits
 
 from ..atomic import write_text
 from ..errors import SymblendError
-from ..landmarks.files import Landmark, LandmarkSet, write_tps_study
+from ..landmarks.formats import Landmark, LandmarkSet, write_tps_study
 from .console import one_line, terminal_progress
-from .files import load_mesh
+from .mesh_io import load_mesh
 from .folder_lock import folder_lock
 from .manifest import OUTPUT_OPTIONS, Row, read_manifest
 from .options import add_filter_options, add_landmark_options, add_missing_option, symmetrize_arguments

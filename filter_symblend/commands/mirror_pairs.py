@@ -8,11 +8,11 @@ import sys
 
 from ..core.mirror_pairs import pairs_to_check
 from ..errors import SymblendError
-from ..landmarks.files import Landmark, LandmarkSet, write_landmarks
+from ..landmarks.formats import Landmark, LandmarkSet, write_landmarks
 from ..parameters import ARRAYS, PARAMETERS, options_of
-from ..pipeline import find_mirror_pairs
+from ..api import find_mirror_pairs
 from .console import progress_display
-from .files import check_outputs, load_mesh
+from .mesh_io import check_outputs, load_mesh
 from .landmark_input import snapped_pairs
 from .options import add_filter_options, add_landmark_options
 

@@ -9,13 +9,13 @@ import sys
 import numpy as np
 
 from ..atomic import all_or_none
-from ..checks.surface_asymmetry import CHECK_SAMPLES
-from ..checks.verdict import result_warnings
+from ..measures.surface_asymmetry import CHECK_SAMPLES
+from ..measures.verdict import result_warnings
 from ..core.mirror_fill import distances_to_surface
 from ..meshlab.attributes import optional_attribute
 from ..meshlab.layer_checks import compare_layers
 from ..meshlab.meshset_filter import UNCERTAINTY_ATTRIBUTE
-from .files import check_outputs, load_mesh, report_json, save_quality_ply
+from .mesh_io import check_outputs, load_mesh, report_json, save_quality_ply
 
 
 def register(commands) -> None:
@@ -73,7 +73,7 @@ def run(args) -> int:
             ms.set_current_mesh(after_id)
             save_quality_ply(ms, distance_file, after_to_before, args.distance_ply)
         if args.png:
-            from ..checks.render import render_comparison  # matplotlib, only for --png
+            from ..measures.render import render_comparison  # matplotlib, only for --png
 
             meshes = [dict(result[key], points=ms.mesh(mesh_id).vertex_matrix(), faces=ms.mesh(mesh_id).face_matrix())
                       for key, mesh_id in (("mirror_asymmetry_before", before_id), ("mirror_asymmetry_after", after_id))]

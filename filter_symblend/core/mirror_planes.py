@@ -1,7 +1,7 @@
 """The mirror plane of a shape's surface, fitted by reflection ICP (the surface matched to its own mirror
 image) from several starting planes, keeping the best: the planes normal to the principal axes and the
 most promising of many directions spread over the half sphere. The automatic pairs start from these
-planes, and the before/after checks measure against them (checks/surface_asymmetry)."""
+planes, and the before/after checks measure against them (measures/surface_asymmetry)."""
 
 from __future__ import annotations
 

@@ -26,7 +26,7 @@ from ..errors import GeometryError, SymblendError
 from .geometry import rigid_fit
 from .landmark_pairs import LandmarkPairs, midline_labels
 from .splines import thin_plate_spline
-from .symmetrize import LandmarkTargets, landmark_targets
+from .solve import LandmarkTargets, landmark_targets
 
 EVALUATED_VALUES = 2**24  # vertices x columns per evaluation of the changes (128 MB of float64)
 

@@ -20,7 +20,7 @@ from ..core.landmark_pairs import LandmarkPairs
 from ..core.mesh_graph import edge_graph
 from ..core.neighbourhoods import mean_nearest_spacing
 from ..errors import LandmarkError, SymblendWarning
-from .files import LandmarkSet
+from .formats import LandmarkSet
 from .pairing import LEFT_WORDS, NUMBERED, RIGHT_WORDS, SnappedPairs, nearest_vertices, side_and_base
 from .semilandmarks import resample_curve
 

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import LandmarkError
 from .curves import add_curve_pairs, find_curves
-from .files import LandmarkSet, read_landmarks
+from .formats import LandmarkSet, read_landmarks
 from .geometric_pairing import MIN_LANDMARKS, pair_by_geometry
 from .pairing import LEFT_WORDS, RIGHT_WORDS, SnappedPairs, pair_by_name, read_pair_table, snap_pairs
 

@@ -22,7 +22,7 @@ from scipy.spatial import cKDTree
 from ..atomic import write_text
 from ..core.landmark_pairs import LandmarkPairs
 from ..errors import LandmarkError, SymblendWarning
-from .files import LandmarkFileError, LandmarkSet
+from .formats import LandmarkFileError, LandmarkSet
 from .text_files import csv_records, read_text
 
 LEFT_WORDS = ("l", "left", "lt")

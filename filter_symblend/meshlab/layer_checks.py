@@ -1,5 +1,5 @@
 """Before/after checks between two layers of a MeshSet: the two-way Hausdorff distance and the mirror
-asymmetry of each on arrays (checks/), and the two-way Hausdorff by MeshLab's own filter (for scripts
+asymmetry of each on arrays (measures/), and the two-way Hausdorff by MeshLab's own filter (for scripts
 that chain it)."""
 
 from __future__ import annotations
@@ -8,8 +8,8 @@ import numpy as np
 import pymeshlab
 from scipy.spatial import cKDTree
 
-from ..checks.hausdorff import two_way_distance
-from ..checks.surface_asymmetry import CHECK_SAMPLES, before_and_after, pairs_plane
+from ..measures.hausdorff import two_way_distance
+from ..measures.surface_asymmetry import CHECK_SAMPLES, before_and_after, pairs_plane
 from ..errors import LandmarkError
 from .attributes import read_landmark_attributes
 from .meshset_filter import TWIN_ATTRIBUTE
@@ -29,7 +29,7 @@ def compare_layers(ms: pymeshlab.MeshSet, before: int, after: int, samples: int 
 
 
 def solved_planes(before: pymeshlab.Mesh, after: pymeshlab.Mesh) -> tuple:
-    """The planes (checks/surface_asymmetry.pairs_plane) on ``before`` and on ``after`` of the pairs the
+    """The planes (measures/surface_asymmetry.pairs_plane) on ``before`` and on ``after`` of the pairs the
     filter solved, as its output carries them: the automatic twins (TWIN_ATTRIBUTE, points of the output;
     on the input, each twin's nearest output vertex), else the landmark pairs of the default pair attribute
     on the output or the input (both sides weighted above 0). (None, None) without them, or when the two

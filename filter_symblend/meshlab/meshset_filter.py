@@ -22,9 +22,9 @@ import numpy as np
 import pymeshlab
 
 from . import recording
-from ..checks.hausdorff import two_way_distance
-from ..checks.surface_asymmetry import input_asymmetry, input_planes, output_asymmetry, pairs_plane
-from ..checks.verdict import nothing_to_restore, result_warnings
+from ..measures.hausdorff import two_way_distance
+from ..measures.surface_asymmetry import input_asymmetry, input_planes, output_asymmetry, pairs_plane
+from ..measures.verdict import nothing_to_restore, result_warnings
 from ..errors import MeshSetError, ParameterError, SymblendWarning
 from ..parameters import keyword_signature, parameters_doc, validate_parameters
 from ..pipeline import build_problem, solve_problem
@@ -100,7 +100,7 @@ def _timed(seconds: dict, name: str, function, *args):
 
 
 def _solved_plane(points: np.ndarray, landmarks, mirror_pairs):
-    """The plane (checks/surface_asymmetry.pairs_plane) on ``points`` (N, 3), the input's or the output's,
+    """The plane (measures/surface_asymmetry.pairs_plane) on ``points`` (N, 3), the input's or the output's,
     of the pairs solved: every automatic twin of ``mirror_pairs`` when there are some, else the checked
     ``landmarks``' pairs with both sides given (weight > 0); None when they do not fix one."""
     if mirror_pairs is not None:
@@ -112,7 +112,7 @@ def _solved_plane(points: np.ndarray, landmarks, mirror_pairs):
 def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExecutor, seconds: dict):
     """(the warp of ``mesh`` with the fill of its missing region, {report key: future} of its checks); no
     layer added. ``options``: every parameter, validated. The checks run in ``pool`` once the problem is
-    valid, each against the solved pairs' plane on its surface (checks/surface_asymmetry): the input's
+    valid, each against the solved pairs' plane on its surface (measures/surface_asymmetry): the input's
     beside the warp with landmark pairs, once they are known with automatic pairs; the output's once the
     warp is known. Each check's own seconds go to ``seconds`` under its report key."""
     region = _missing_region(mesh, options["missing_region"], options["weight_attribute"])
@@ -154,7 +154,7 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExec
 
 def _needs_nothing(checks: dict[str, Future], landmarks: dict | None) -> bool:
     """Whether the (finished) checks and the landmark pairs' own asymmetry (``landmarks``, None without
-    landmark pairs) say there is nothing to restore (checks/verdict.nothing_to_restore)."""
+    landmark pairs) say there is nothing to restore (measures/verdict.nothing_to_restore)."""
     if "mirror_asymmetry_before" not in checks:
         return False
     return nothing_to_restore(checks["mirror_asymmetry_before"].result(), checks["mirror_asymmetry_after"].result(),

@@ -1,8 +1,8 @@
-"""``filter_symblend.symmetrize`` on arrays: a :class:`Problem` built and validated once
-(``build_problem``), solved by ``solve_problem``; the adapters above (meshlab/, commands/) translate their
-medium into the problem and the result back."""
+"""One symmetrization as a :class:`Problem` built and validated once (``build_problem``) and solved by
+``solve_problem``; every door (the array API in ``filter_symblend.api``, the MeshSet filter in meshlab/,
+the command through it) translates its medium into the problem and the result back."""
 
 from .problem import Problem, build_problem
-from .run import find_mirror_pairs, solve_problem, symmetrize
+from .run import solve_problem
 
-__all__ = ["Problem", "build_problem", "find_mirror_pairs", "solve_problem", "symmetrize"]
+__all__ = ["Problem", "build_problem", "solve_problem"]

@@ -2,7 +2,7 @@
 order (the options, then the points, the faces, the vertices kept out, the missing region, whether the
 landmarks fit the pair source, and the landmarks themselves), each message naming the argument, as
 scipy's RBFInterpolator does; every adapter (the MeshSet filter, the command, a batch row, a filter
-script) builds one and hands it to :func:`filter_symblend.pipeline.run.solve_problem`."""
+script) builds one and hands it to :func:`filter_symblend.pipeline.solve_problem`."""
 
 from __future__ import annotations
 

@@ -21,7 +21,7 @@ BATCH_PAIRS = 100
 def _batch_study(folder: pathlib.Path) -> pathlib.Path:
     """16 copies of the cow midpoint-subdivided twice (46k vertices), each bent by its own angle and posed, with 100
     landmark pairs: the manifest."""
-    from filter_symblend.landmarks.files import Landmark, LandmarkSet, write_landmarks
+    from filter_symblend.landmarks.formats import Landmark, LandmarkSet, write_landmarks
 
     *_, (points, offset, partner) = subdivided_cows(2)
     ms = pymeshlab.MeshSet()

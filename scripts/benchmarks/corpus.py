@@ -13,8 +13,8 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from filter_symblend import SymblendError, symmetrize
-from filter_symblend.checks.hausdorff import two_way_distance
-from filter_symblend.checks.surface_asymmetry import mirror_distances
+from filter_symblend.measures.hausdorff import two_way_distance
+from filter_symblend.measures.surface_asymmetry import mirror_distances
 from filter_symblend.core.geometry import flat_normal, reflection_across_plane, voxel_grid
 from filter_symblend.core.mesh_graph import vertex_adjacency
 from filter_symblend.core.mirror_fill import distances_to_surface

@@ -6,7 +6,7 @@ and stderr; the exit status stays 0.
 
 from __future__ import annotations
 
-SOLVED = "the solved pairs"  # a measured plane's ``plane_from`` when it is the solved pairs' (checks/surface_asymmetry)
+SOLVED = "the solved pairs"  # a measured plane's ``plane_from`` when it is the solved pairs' (measures/surface_asymmetry)
 
 WORSE_MARGIN = 0.05  # the output's 90th percentile above the input's by more than this fraction: worse
 # An input whose 99th percentile of mirror asymmetry is below this fraction of its diagonal is symmetric
