@@ -26,7 +26,7 @@ import dataclasses
 
 import numpy as np
 
-from ..core.geometry import voxel_grid
+from ..core.geometry import bounding_diagonal, voxel_grid
 from ..core.mesh_graph import one_pair_per_vertex
 from ..core.surface_points import vertex_points
 from ..core.landmark_pairs import LandmarkPairs, check_landmarks
@@ -215,7 +215,7 @@ def _distinct(points, left, right, midline, user, coincident):
     point cloud's vertex), the first is kept."""
     fixed = np.zeros(0, dtype=np.int64) if user is None else np.concatenate([user.left, user.right, user.midline])
     used = np.concatenate([fixed, left, right, midline])
-    scale = coincident * float(np.linalg.norm(np.ptp(points[used], axis=0)) or 1.0)
+    scale = coincident * (bounding_diagonal(points[used]) or 1.0)
     cells = np.round(points[used] / scale).astype(np.int64)
     _, first = np.unique(cells, axis=0, return_index=True)
     alone = np.zeros(len(used), dtype=bool)

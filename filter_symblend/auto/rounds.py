@@ -231,18 +231,19 @@ def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: d
         warnings.warn(message, SymblendWarning, stacklevel=3)
     if progress is not None:
         progress(100.0, "done")
-    return _final(points, surface.representative, result, landmarks, report, stopped, clock, twins)
+    report["stopped"] = stopped
+    return _final(points, surface.representative, result, landmarks, report, clock, twins)
 
 
-def _final(points, representative, result, landmarks, report, stopped, clock, twins) -> SymmetrizationResult:
+def _final(points, representative, result, landmarks, report, clock, twins) -> SymmetrizationResult:
     """The result cut back to the input's vertices (each duplicate where its first copy went), with the
-    automatic pairs' report."""
+    automatic pairs' ``report`` (why the rounds stopped already in it)."""
     final = result.report
     user_pairs = 0 if landmarks is None else len(landmarks.left)
     user_midline = 0 if landmarks is None else len(landmarks.midline)
     kept = [entry for entry in report["rounds"]
             if entry.get("kept", True) and not entry.get("landmarks_only") and not entry.get("intrinsic_start")]
-    report.update(stopped=stopped, pair_count=int(final["pair_count"] - user_pairs),
+    report.update(pair_count=int(final["pair_count"] - user_pairs),
                   midline_count=int(final["midline_count"] - user_midline),
                   twins_are=kept[-1]["twins_are"] if kept else None,
                   consistency=kept[-1]["consistency"] if kept else None, mirror_map=twins.report)

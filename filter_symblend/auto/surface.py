@@ -19,7 +19,7 @@ import functools
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..core.geometry import flat_normal, normalize
+from ..core.geometry import bounding_diagonal, flat_normal, normalize
 from ..core.mesh_graph import vertex_adjacency
 from ..core.surface_points import barycentric, vertex_points
 from ..core.mesh_quantities import vertex_normals
@@ -80,7 +80,7 @@ class Surface:
     @functools.cached_property
     def diagonal(self) -> float:
         used = self.points[self.usable_index]
-        return float(np.linalg.norm(np.ptp(used, axis=0))) if len(used) else 0.0
+        return bounding_diagonal(used)
 
     @functools.cached_property
     def vertex_tree(self) -> cKDTree:

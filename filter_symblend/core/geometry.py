@@ -22,6 +22,12 @@ FLAT = 1e-9  # a point set whose smallest spread is below this fraction of its l
 FLAT_SAMPLES = 20000  # points (evenly strided) that decide whether a point set is flat
 
 
+def bounding_diagonal(points: np.ndarray) -> float:
+    """Length of the diagonal of the axis-aligned bounding box of ``points`` (n, 3), mesh units: the scale
+    every relative figure and tolerance of the package divides by (0.0 for no points)."""
+    return float(np.linalg.norm(np.ptp(points, axis=0))) if len(points) else 0.0
+
+
 def normalize(vectors: np.ndarray) -> np.ndarray:
     """Unit vectors of ``vectors`` (..., 3); zero vectors stay zero."""
     norms = np.linalg.norm(vectors, axis=-1, keepdims=True)

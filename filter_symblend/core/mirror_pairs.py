@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from .geometry import bounding_diagonal
 from .mesh_quantities import farthest_point_order
 
 CONFIDENT = 0.5  # a twin at or above this confidence counts as confident (see auto/confidence)
@@ -77,4 +78,4 @@ def pairs_to_check(pairs: MirrorPairs, points: np.ndarray, count: int,
     (N, 3) by :func:`spread_left_sides`."""
     points = np.asarray(points, dtype=float)
     return spread_left_sides(points[pairs.vertex], pairs.twin, pairs.confident(threshold), count,
-                             float(np.linalg.norm(np.ptp(points, axis=0))))
+                             bounding_diagonal(points))

@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 
 from ..errors import GeometryError, SymblendWarning, id_list
-from .geometry import flat_normal, minimal_rotation, normalize, rigid_fit
+from .geometry import bounding_diagonal, flat_normal, minimal_rotation, normalize, rigid_fit
 from .global_solve import MINUS_X, global_solve
 from .landmark_asymmetry import fit_mirror_plane
 from .landmark_pairs import LandmarkPairs, midline_labels
@@ -192,7 +192,7 @@ def solve(points: np.ndarray, landmarks: LandmarkPairs, options: dict, progress=
     steps = landmark_targets(points, landmarks, options, progress, warn, clock)
     unique, solved, rotation, translation = steps.vertices, steps.solved, steps.rotation, steps.translation
     flat, local, centres = steps.flat, steps.local, points[unique]
-    diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+    diagonal = bounding_diagonal(points)
     _report_progress(progress, 50.0, f"warping {len(points)} vertices")
 
     target = steps.target

@@ -16,6 +16,7 @@ import warnings
 
 import numpy as np
 
+from ..core.geometry import bounding_diagonal
 from ..core.landmark_pairs import LandmarkPairs
 from ..core.mesh_graph import edge_graph
 from ..core.neighbourhoods import mean_nearest_spacing
@@ -80,7 +81,7 @@ def add_curve_pairs(snapped: SnappedPairs, points: np.ndarray, faces: np.ndarray
     if not len(faces):
         raise LandmarkError(f"{source}: curves are traced on the surface, and this mesh has no faces; "
                             "reconstruct a surface first (e.g. MeshLab's screened Poisson), or leave out --curves.")
-    spacing = spacing or DEFAULT_SPACING * float(np.linalg.norm(np.ptp(points, axis=0)))
+    spacing = spacing or DEFAULT_SPACING * bounding_diagonal(points)
     names = landmarks.names()
     graph = edge_graph(points, faces)
     pairs, pair_names = snapped.pairs, list(snapped.pair_names)

@@ -20,6 +20,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..atomic import write_text
+from ..core.geometry import bounding_diagonal
 from ..core.landmark_pairs import LandmarkPairs
 from ..errors import LandmarkError, SymblendWarning
 from .formats import LandmarkFileError, LandmarkSet
@@ -105,7 +106,7 @@ def nearest_vertices(points: np.ndarray, positions: np.ndarray, names: list[str]
     (k, 3). Points farther than FAR_FROM_SURFACE from the surface are an error that names them
     (a wrong coordinate system or unit is likelier than such a landmark), a warning with ``allow_far``."""
     distances, vertices = cKDTree(points).query(positions)
-    diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
+    diagonal = bounding_diagonal(points)
     far = np.flatnonzero(distances > FAR_FROM_SURFACE * diagonal)
     if far.size:
         shown = ", ".join(f"{names[i]} ({distances[i]:.3g})" for i in far[:10])

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.geometry import MirrorPlane, reflection_across_plane
+from ..core.geometry import MirrorPlane, bounding_diagonal, reflection_across_plane
 from ..core.landmark_asymmetry import MirrorFit, fit_mirror_plane
 from ..core.mesh_quantities import evenly
 from ..core.mirror_fill import distance_to
@@ -65,7 +65,7 @@ def before_and_after(before: tuple[np.ndarray, np.ndarray], after: tuple[np.ndar
     ``symblend report`` all measure this way, so the same two surfaces and pairs give the same figures;
     both relative to ``before``'s bounding-box diagonal."""
     starts = input_planes(before[0], solved[0])
-    diagonal = float(np.linalg.norm(np.ptp(before[0], axis=0)))
+    diagonal = bounding_diagonal(before[0])
     return (input_asymmetry(*before, starts, diagonal, samples, solved[0]),
             output_asymmetry(*after, starts, diagonal, samples, solved[1]))
 
@@ -159,7 +159,7 @@ def mirror_asymmetry(points: np.ndarray, faces: np.ndarray, initial: MirrorFit |
     queries = points if samples is None else evenly(points, samples)
     distances = mirror_distances(points, faces, normal, offset, queries, to_surface)
     if diagonal is None:
-        diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+        diagonal = bounding_diagonal(points)
     stats = distance_summary(distances)
     return {**stats, **{f"{k}_relative": v / diagonal for k, v in stats.items()},
             "plane_normal": np.asarray(normal, dtype=float).tolist(), "plane_offset": float(offset),

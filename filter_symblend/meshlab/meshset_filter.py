@@ -126,7 +126,7 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExec
     problem = build_problem(mesh.vertex_matrix(), options, faces=mesh.face_matrix(), missing=missing,
                             missing_faces=missing_faces, **landmarks)
     points, faces = problem.points, problem.faces
-    diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
+    diagonal = problem.diagonal
     checks = {}
 
     def check_input(mirror_pairs) -> Future:

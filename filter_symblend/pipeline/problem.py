@@ -7,10 +7,12 @@ script) builds one and hands it to :func:`filter_symblend.pipeline.solve_problem
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 
 from ..auto import DEFAULT, AutoConfig
+from ..core.geometry import bounding_diagonal
 from ..core.landmark_pairs import LandmarkPairs, check_landmarks, check_points
 from ..errors import LandmarkError, ParameterError
 
@@ -33,6 +35,11 @@ class Problem:
     missing: np.ndarray | None
     missing_faces: np.ndarray | None
     auto_config: AutoConfig
+
+    @functools.cached_property
+    def diagonal(self) -> float:
+        """The bounding-box diagonal of ``points``, mesh units: what relative figures divide by."""
+        return bounding_diagonal(self.points)
 
 
 def build_problem(points, options: dict, left=None, right=None, pair_ids=None, midline=None, left_weights=None,
