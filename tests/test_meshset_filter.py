@@ -56,6 +56,27 @@ def test_adds_one_current_layer_and_leaves_the_input_alone(bent_cow_meshset):
     assert np.abs(mirrored - out.vertex_matrix()[left]).max() < 1e-12
 
 
+def test_each_landmark_attribute_is_read_once_and_the_output_carries_it(bent_cow_meshset, monkeypatch):
+    """The pair, midline and weight attributes are read from the mesh once per call (the landmarks, the
+    missing region and the output layer share what was read), and the output carries the same values."""
+    ms, deformed, left, right = bent_cow_meshset
+    mesh = ms.current_mesh()
+    weights = np.ones(mesh.vertex_number())
+    weights[right[:3]] = 0.0  # three broken right landmarks, also the region to fill
+    mesh.add_vertex_custom_scalar_attribute(weights, "symblend_weight")
+    midline = np.zeros(mesh.vertex_number())
+    mesh.add_vertex_custom_scalar_attribute(midline, "symblend_midline")
+    reads = []
+    original = pymeshlab.Mesh.vertex_custom_scalar_attribute_array
+    monkeypatch.setattr(pymeshlab.Mesh, "vertex_custom_scalar_attribute_array",
+                        lambda m, name: reads.append(name) or original(m, name))
+    ms.generate_symmetrized_mesh(mode="affine", missing_region="weight", checks="none")
+    assert sorted(reads) == ["symblend_midline", "symblend_pair", "symblend_weight"]
+    output = ms.current_mesh()
+    for name, values in (("symblend_weight", weights), ("symblend_midline", midline)):
+        np.testing.assert_array_equal(output.vertex_custom_scalar_attribute_array(name), values)
+
+
 def test_output_matches_the_array_core(bent_cow_meshset):
     ms, deformed, left, right = bent_cow_meshset
     ms.generate_symmetrized_mesh(mode="articulated", phi_width=4, output_frame="canonical")

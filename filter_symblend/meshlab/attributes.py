@@ -114,24 +114,38 @@ def pairs_from_attribute(values: np.ndarray, attribute: str) -> LandmarkPairs:
     )
 
 
+def read_attributes(mesh: pymeshlab.Mesh, names) -> dict[str, np.ndarray]:
+    """{name: (N,) values} of the per-vertex custom scalar attributes among ``names`` that ``mesh`` has, each
+    read once."""
+    return {name: values for name in names if (values := optional_attribute(mesh, name)) is not None}
+
+
 def read_landmark_attributes(mesh: pymeshlab.Mesh, pair_attribute: str = DEFAULTS["pair_attribute"],
                              midline_attribute: str = DEFAULTS["midline_attribute"],
-                             weight_attribute: str = DEFAULTS["weight_attribute"]):
-    """The pairs of ``mesh``, with their midline landmarks and weights (None where the mesh has none)."""
-    values = optional_attribute(mesh, pair_attribute)
+                             weight_attribute: str = DEFAULTS["weight_attribute"]) -> LandmarkPairs:
+    """The pairs of ``mesh``, with their midline landmarks and weights (all 1 where the mesh has none)."""
+    names = (pair_attribute, midline_attribute, weight_attribute)
+    return landmarks_from_attributes(read_attributes(mesh, names), mesh.label(), *names)
+
+
+def landmarks_from_attributes(found: dict[str, np.ndarray], label: str, pair_attribute: str,
+                              midline_attribute: str, weight_attribute: str) -> LandmarkPairs:
+    """The pairs in the attributes ``found`` ({name: (N,)}, as :func:`read_attributes` gives them) of the
+    mesh labelled ``label``, with their midline landmarks and weights."""
+    values = found.get(pair_attribute)
     if values is None:
         raise LandmarkError(
-            f"The current mesh ('{mesh.label()}') has no per-vertex custom scalar attribute "
+            f"The current mesh ('{label}') has no per-vertex custom scalar attribute "
             f"`{pair_attribute}`. Add the pairs first: "
             f"ms.current_mesh().add_vertex_custom_scalar_attribute(labels, '{pair_attribute}') with "
             "+k on the left vertex of pair k, -k on the right one and 0 elsewhere (or "
             "filter_symblend.meshlab.attributes.write_landmark_attributes), or name your attribute "
             "with `pair_attribute`.")
     pairs = pairs_from_attribute(values, pair_attribute)
-    midline_values = optional_attribute(mesh, midline_attribute)
+    midline_values = found.get(midline_attribute)
     if midline_values is not None:
         pairs = LandmarkPairs(pairs.ids, pairs.left, pairs.right, np.flatnonzero(midline_values))
-    weights = optional_attribute(mesh, weight_attribute)
+    weights = found.get(weight_attribute)
     if weights is None:
         return pairs
     off = pairs.midline[weights[pairs.midline] != 1]

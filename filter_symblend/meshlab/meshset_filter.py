@@ -28,18 +28,19 @@ from ..measures.verdict import nothing_to_restore, result_warnings
 from ..errors import MeshSetError, ParameterError, SymblendWarning
 from ..parameters import keyword_signature, parameters_doc, validate_parameters
 from ..pipeline import build_problem, solve_problem
-from .attributes import optional_attribute, read_landmark_attributes
+from .attributes import landmarks_from_attributes, read_attributes
 from .output_layer import (ASYMMETRY_ATTRIBUTE, CONFIDENCE_ATTRIBUTE, TWIN_ATTRIBUTE, UNCERTAINTY_ATTRIBUTE,
                            add_output_layer)
 
 FILTER_NAME = "generate_symmetrized_mesh"
 DISPLAY_NAME = "Symmetrize: Closed-form Blending of Local Symmetries"
+_ATTRIBUTE_OPTIONS = ("pair_attribute", "midline_attribute", "weight_attribute")  # the attributes the filter reads
 WRITTEN = (ASYMMETRY_ATTRIBUTE, TWIN_ATTRIBUTE, CONFIDENCE_ATTRIBUTE, UNCERTAINTY_ATTRIBUTE)
 
 
-def _missing_region(mesh: pymeshlab.Mesh, region: str, weight_attribute: str):
+def _missing_region(mesh: pymeshlab.Mesh, region: str, weight_attribute: str, weights: np.ndarray | None):
     """(missing (N,) in [0, 1], faces excluded from the intact surface (F,) bool) for
-    ``missing_region``, or None for 'none'."""
+    ``missing_region``, or None for 'none'; ``weights``: the mesh's ``weight_attribute`` (None: it has none)."""
     if region == "none":
         return None
     if mesh.is_point_cloud():
@@ -47,7 +48,6 @@ def _missing_region(mesh: pymeshlab.Mesh, region: str, weight_attribute: str):
                            f"('{mesh.label()}') is a point cloud; use missing_region='none'.")
     faces = mesh.face_matrix()
     if region == "weight":
-        weights = optional_attribute(mesh, weight_attribute)
         if weights is None:
             raise MeshSetError(
                 f"`missing_region='weight'` reads the per-vertex attribute `{weight_attribute}`, and the "
@@ -70,14 +70,15 @@ def _missing_region(mesh: pymeshlab.Mesh, region: str, weight_attribute: str):
     return missing, selected_faces
 
 
-def _fingerprint(mesh: pymeshlab.Mesh, options: dict) -> str:
-    """A digest of everything the filter reads from ``mesh``: equal digests, equal results."""
+def _fingerprint(mesh: pymeshlab.Mesh, options: dict, found: dict[str, np.ndarray]) -> str:
+    """A digest of everything the filter reads from ``mesh`` (its landmark attributes ``found``, read once):
+    equal digests, equal results."""
     digest = hashlib.sha1(repr(sorted(options.items())).encode())
     for array in (mesh.vertex_matrix(), mesh.face_matrix(), mesh.vertex_selection_array(),
                   mesh.face_selection_array()):
         digest.update(np.ascontiguousarray(array).tobytes())
     for name in (options["pair_attribute"], options["midline_attribute"], options["weight_attribute"]):
-        values = optional_attribute(mesh, name)
+        values = found.get(name)
         digest.update(b"-" if values is None else values.tobytes())
     return digest.hexdigest()
 
@@ -109,18 +110,19 @@ def _solved_plane(points: np.ndarray, landmarks, mirror_pairs):
     return pairs_plane(points[landmarks.left[both]], points[landmarks.right[both]])
 
 
-def _compute(mesh: pymeshlab.Mesh, options: dict, progress, pool: ThreadPoolExecutor, seconds: dict):
+def _compute(mesh: pymeshlab.Mesh, options: dict, found: dict, progress, pool: ThreadPoolExecutor, seconds: dict):
     """(the warp of ``mesh`` with the fill of its missing region, {report key: future} of its checks); no
-    layer added. ``options``: every parameter, validated. The checks run in ``pool`` once the problem is
+    layer added. ``options``: every parameter, validated; ``found``: the mesh's landmark attributes, read
+    once (meshlab/attributes.read_attributes). The checks run in ``pool`` once the problem is
     valid, each against the solved pairs' plane on its surface (measures/surface_asymmetry): the input's
     beside the warp with landmark pairs, once they are known with automatic pairs; the output's once the
     warp is known. Each check's own seconds go to ``seconds`` under its report key."""
-    region = _missing_region(mesh, options["missing_region"], options["weight_attribute"])
+    region = _missing_region(mesh, options["missing_region"], options["weight_attribute"],
+                             found.get(options["weight_attribute"]))
     missing, missing_faces = (None, None) if region is None else region
     landmarks = {}
     if options["pairs"] != "auto":  # with automatic pairs alone, the landmark attributes are not read
-        pairs = read_landmark_attributes(mesh, **{name: options[name] for name in
-                                                  ("pair_attribute", "midline_attribute", "weight_attribute")})
+        pairs = landmarks_from_attributes(found, mesh.label(), *(options[name] for name in _ATTRIBUTE_OPTIONS))
         landmarks = dict(left=pairs.left, right=pairs.right, pair_ids=pairs.ids, midline=pairs.midline,
                          left_weights=pairs.left_weights, right_weights=pairs.right_weights)
     problem = build_problem(mesh.vertex_matrix(), options, faces=mesh.face_matrix(), missing=missing,
@@ -186,22 +188,22 @@ def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict |
         )
     input_id = ms.current_mesh_id()
     mesh = ms.current_mesh()
-    names = [options[name] for name in ("pair_attribute", "midline_attribute", "weight_attribute")]
+    names = [options[name] for name in _ATTRIBUTE_OPTIONS]
     if len(set(names)) < len(names) or set(WRITTEN) & set(names):
         raise ParameterError(
             f"`pair_attribute`, `midline_attribute` and `weight_attribute` must be three different "
             f"names, none of them {', '.join(f'`{name}`' for name in WRITTEN)} (the filter writes them); "
             f"got {', '.join(names)}.")
-    key = None if cache is None else _fingerprint(mesh, options)
+    carried = read_attributes(mesh, names)  # read once: the landmarks, the missing region, the output layer
+    key = None if cache is None else _fingerprint(mesh, options, carried)
     result = None if cache is None else cache.get(key)
-    carried = {name: values for name in names if (values := optional_attribute(mesh, name)) is not None}
     if result is not None:
         with recording.recorded_call(ms, options):  # our native steps, saved as one node of ours
             output_id = add_output_layer(ms, input_id, result, carried)
     else:
         check_seconds = {}
         with ThreadPoolExecutor(max_workers=1) as pool:
-            result, checks = _compute(mesh, options, progress, pool, check_seconds)
+            result, checks = _compute(mesh, options, carried, progress, pool, check_seconds)
             with recording.recorded_call(ms, options):
                 output_id = add_output_layer(ms, input_id, result, carried, list(checks.values()))
                 unchanged = _needs_nothing(checks, result.report.get("landmark_asymmetry_before"))
