@@ -8,7 +8,7 @@ scipy's RBFInterpolator(kernel="linear", degree=1) fitted and evaluated through 
 (the plain-scipy way to do the dominant step). With --accuracy, the chosen warp against the dense LU's
 at every vertex (the dense solve takes about 30 s at 13,000 landmarks).
 
-    python scripts/benchmark_dense.py [--pairs 1000 10000] [--accuracy]
+    python scripts/benchmark_dense.py [--pairs 1000 10000] [--accuracy] [--mesh igea|cow]
 """
 
 from __future__ import annotations
@@ -35,10 +35,12 @@ PAIR_TOLERANCE = 0.02  # approximate mirror pairs: reflections within 2 % of the
 RBF_CENTRES = 10_000  # scipy's dense RBFInterpolator beyond this: out of reach
 
 
-def mesh() -> tuple[str, np.ndarray, np.ndarray]:
-    """(name, points, faces) of the benchmark mesh."""
+def mesh(name: str) -> tuple[str, np.ndarray, np.ndarray]:
+    """(name, points, faces) of the benchmark mesh: Igea decimated to 32k vertices (``name`` 'igea', when
+    ../shared is present: 6,496 approximate pairs at most) or pymeshlab's exactly symmetric cow subdivided
+    twice (19k vertices, a pair for every vertex off the plane)."""
     ms = pymeshlab.MeshSet()
-    if (SHARED / "igea.ply").exists():
+    if name == "igea" and (SHARED / "igea.ply").exists():
         ms.load_new_mesh(str(SHARED / "igea.ply"))
         ms.meshing_remove_unreferenced_vertices()
         ms.meshing_decimation_quadric_edge_collapse(targetfacenum=64_000)
@@ -66,8 +68,11 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--pairs", type=int, nargs="+", default=[1000, 10000])
     parser.add_argument("--accuracy", action="store_true", help="the warp against the dense LU's at every vertex")
+    parser.add_argument("--mesh", choices=["igea", "cow"], default="igea",
+                        help="igea (32k vertices, at most 6,496 pairs; the cow without ../shared) or cow (19k, "
+                             "exactly symmetric: 10^4 pairs and more)")
     args = parser.parse_args(argv)
-    name, points, faces = mesh()
+    name, points, faces = mesh(args.mesh)
     deformed = synthetic.figure_1_deformation(points)
     offset, partner = synthetic.mirror_partners(points, tolerance=PAIR_TOLERANCE)
     diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))

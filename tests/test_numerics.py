@@ -356,3 +356,17 @@ def test_farthest_point_order_matches_the_textbook_loop():
         expected.append(int(np.argmax(distance)))
         distance = np.minimum(distance, np.linalg.norm(points - points[expected[-1]], axis=1))
     np.testing.assert_array_equal(farthest_point_order(points, 200, start=7), expected)
+
+
+@pytest.mark.parametrize("count", [5, 300, 3001])
+def test_the_spline_at_its_own_centres_equals_the_direct_sum(count):
+    """The refinement's product K w computes each distance between two centres once for both; against the
+    direct sum from scipy's cdist, with two centres 1e-9 apart (evaluated from coordinate differences)."""
+    from scipy.spatial.distance import cdist
+    rng = np.random.default_rng(count)
+    centres = rng.normal(size=(count, 3))
+    centres[1] = centres[0] + 1e-9
+    weights, polynomial = rng.normal(size=(count, 3)), rng.normal(size=(4, 3))
+    spline = warp.ThinPlateSpline.from_coefficients(centres, np.zeros(3), 1.0, weights, polynomial, "")
+    direct = np.column_stack([np.ones(count), centres]) @ polynomial - cdist(centres, centres) @ weights
+    np.testing.assert_allclose(spline.at_centres(), direct, rtol=0, atol=1e-12 * np.abs(direct).max())

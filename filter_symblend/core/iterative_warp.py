@@ -8,7 +8,8 @@ machine busy. Here it is solved by preconditioned iterative refinement (Richards
   dw -= U U^T dw         kept in the null space of P^T (U: orthonormal basis of P's columns)
   w += dw; a = the least-squares affine part of v - K w; r = v - K w - P a
 
-with one product K w per step (O(k^2), blocked as the warp's evaluation). The preconditioner is two
+with one product K w per step (O(k^2), each distance between two landmarks computed once for both:
+ThinPlateSpline.at_centres). The preconditioner is two
 levels of a Schwarz method (Beatson, Light & Billings 2000): the exact spline through a farthest-point
 subset of COARSE_CENTRES landmarks (its LU kept), then, on the residual that leaves, local splines on
 overlapping patches, each landmark taking its coefficient from the patch whose centre is nearest

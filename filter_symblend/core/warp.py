@@ -116,17 +116,44 @@ class ThinPlateSpline:
 
     def at_centres(self) -> np.ndarray:
         """The spline's values (k, d) at its own centres, each centre's own term exactly 0 (the expanded
-        squared distance leaves sqrt(rounding) there)."""
-        return self._evaluate(self._centres, None, True, own_centres=True)
+        squared distance leaves sqrt(rounding) there). The distances between centres are symmetric: each is
+        computed once (the block of rows [s, e) against the centres from s on) and serves both of its
+        centres, half the work of evaluating at k other points (the iterative solve's product per step)."""
+        centres, weights = self._centres, self._weights
+        k = len(centres)
+        out = self._polynomial_part(centres)
+        augmented = self._augmented(centres)
+        rows = max(1, BLOCK_ELEMENTS // k)
+        starts = list(range(0, k, rows))
+        tasks = min(len(starts), 2 * WORKERS)  # blocks dealt round-robin: each task gets long and short rows
 
-    def _evaluate(self, x: np.ndarray, progress, parallel: bool, own_centres: bool = False) -> np.ndarray:
-        """Values (m, d) at ``x`` (m, 3) in the spline's scaled coordinates; ``own_centres``: x is the centres."""
-        out = self._polynomial_part(x)
+        def accumulate(task: int) -> np.ndarray:
+            part = np.zeros_like(out)
+            for start in starts[task::tasks]:
+                end = min(start + rows, k)
+                distances = augmented[start:end] @ self._expanded[:, start:]
+                np.sqrt(distances, out=distances)
+                distances[np.arange(end - start), np.arange(end - start)] = 0.0
+                part[start:end] -= distances @ weights[start:]
+                part[end:] -= distances[:, end - start:].T @ weights[start:end]
+            return part
+        for part in in_threads(accumulate, range(tasks)):
+            out += part
+        return self._exact_near(centres, out, own_centres=True)
+
+    def _augmented(self, x: np.ndarray) -> np.ndarray:
+        """[x, 1, |x|^2 (+ rounding)] (m, 5): its product with ``_expanded`` gives squared distances to the centres."""
         augmented = np.empty((len(x), 5))
         augmented[:, :3] = x
         augmented[:, 3] = 1.0
         squares = np.einsum("ij,ij->i", x, x)
         augmented[:, 4] = squares + ROUNDING * (squares + self._largest_square)
+        return augmented
+
+    def _evaluate(self, x: np.ndarray, progress, parallel: bool) -> np.ndarray:
+        """Values (m, d) at ``x`` (m, 3) in the spline's scaled coordinates."""
+        out = self._polynomial_part(x)
+        augmented = self._augmented(x)
         rows = max(1, BLOCK_ELEMENTS // len(self._centres))
         chunk = int(min(CHUNK_ROWS, max(rows, -(-len(x) // (2 * WORKERS)))))  # two tasks per core at least
 
@@ -137,8 +164,6 @@ class ThinPlateSpline:
                 block = augmented[row:min(row + rows, end)]
                 here = np.matmul(block, self._expanded, out=distances[:len(block)])
                 np.sqrt(here, out=here)
-                if own_centres:
-                    here[np.arange(len(block)), row + np.arange(len(block))] = 0.0
                 out[row:row + len(block)] -= here @ self._weights
             return end
 
@@ -149,6 +174,11 @@ class ThinPlateSpline:
             if progress is not None and (end / len(x) >= reported + 0.05 or end == len(x)):
                 reported = end / len(x)
                 progress(reported)
+        return self._exact_near(x, out, own_centres=False)
+
+    def _exact_near(self, x: np.ndarray, out: np.ndarray, own_centres: bool) -> np.ndarray:
+        """``out`` (m, d) with the values at the ``x`` within NEAR of a centre (another one, for the centres
+        themselves) computed again from coordinate differences."""
         nearest = cKDTree(self._centres).query(x, k=2 if own_centres else 1, distance_upper_bound=NEAR,
                                                workers=-1)[0]
         near = np.flatnonzero((nearest[:, 1] if own_centres else nearest) <= NEAR)  # another centre that near
