@@ -80,7 +80,8 @@ class _Preconditioner:
 
 def iterative_thin_plate_spline(centres: np.ndarray, values: np.ndarray) -> ThinPlateSpline:
     """The thin-plate spline through ``values`` (k, d) at ``centres`` (k, 3), its affine part included, by
-    the refinement above; its ``residual`` is the largest misfit at the centres relative to their extent."""
+    the refinement above; its ``residual`` is the largest misfit at the centres relative to their extent, its
+    ``steps`` the refinement steps taken."""
     shift = centres.mean(axis=0)
     scale = float(np.ptp(centres, axis=0).max()) or 1.0
     scaled = (centres - shift) / scale
@@ -107,5 +108,5 @@ def iterative_thin_plate_spline(centres: np.ndarray, values: np.ndarray) -> Thin
     spline = ThinPlateSpline.from_coefficients(
         scaled, shift, scale, weights, polynomial, f"thin-plate spline through the {len(centres)} landmarks, "
         f"solved iteratively ({step} steps, largest residual {misfit:.1e} of their extent)")
-    spline.residual = misfit
+    spline.residual, spline.steps = misfit, step
     return spline

@@ -49,6 +49,17 @@ class LocalSymmetries:
     stretch: np.ndarray
     point_reflections: np.ndarray
 
+    def rotated(self, rotation: np.ndarray) -> LocalSymmetries:
+        """The same local symmetries in a frame rotated by ``rotation`` (3, 3) (Step 2 solves in the frame
+        whose x axis is the first pair's mirror normal)."""
+
+        def conjugated(m):
+            return rotation @ m @ rotation.T
+
+        return dataclasses.replace(
+            self, normals=self.normals @ rotation.T, left_transforms=conjugated(self.left_transforms),
+            right_transforms=conjugated(self.right_transforms), gap_transforms=conjugated(self.gap_transforms))
+
 
 @dataclasses.dataclass(frozen=True)
 class _Moments:

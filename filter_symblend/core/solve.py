@@ -49,17 +49,6 @@ class SymmetrizationResult:
     uncertainty: np.ndarray | None = None
 
 
-def _rotated(local: LocalSymmetries, rotation: np.ndarray) -> LocalSymmetries:
-    """Step 1 output expressed in a frame rotated by ``rotation`` (3, 3)."""
-
-    def conj(m):
-        return rotation @ m @ rotation.T
-
-    return dataclasses.replace(
-        local, normals=local.normals @ rotation.T, left_transforms=conj(local.left_transforms),
-        right_transforms=conj(local.right_transforms), gap_transforms=conj(local.gap_transforms))
-
-
 def _warn_about_local_fits(local: LocalSymmetries, left, right, ids: np.ndarray, mode: str) -> None:
     gaps = np.einsum("nij,nj->ni", local.gap_transforms, right - left)
     cosine = np.einsum("ni,ni->n", local.normals, normalize(gaps))
@@ -169,7 +158,7 @@ def landmark_targets(points: np.ndarray, landmarks: LandmarkPairs, options: dict
     # depend on the input pose (bent cow, three poses: shape error 0.24-1.31% of
     # the diagonal without this, 0.23% with it).
     frame = minimal_rotation(normalize(local.normals.mean(axis=0)), MINUS_X)[0]
-    r, s = global_solve(phi, p0 @ frame.T, q0 @ frame.T, _rotated(local, frame), options["alpha"],
+    r, s = global_solve(phi, p0 @ frame.T, q0 @ frame.T, local.rotated(frame), options["alpha"],
                         left_weights=wl, right_weights=wr, on_plane=on_plane)
     solved = np.vstack([r[:n], s[:n], r[n:]])
     if not np.isfinite(solved).all():
