@@ -12,6 +12,7 @@ pymeshlab, and does not load it.
 
 import importlib
 
+from .api import find_mirror_pairs, symmetrize
 from .core.mirror_pairs import MirrorPairs
 from .core.solve import SymmetrizationResult
 from .errors import (GeometryError, LandmarkError, MeshSetError, ParameterError, SymblendError,
@@ -19,7 +20,6 @@ from .errors import (GeometryError, LandmarkError, MeshSetError, ParameterError,
 from .landmarks.from_file import pairs_from_landmark_file
 from .meshlab.when_imported import bind_when_pymeshlab_imported
 from .parameters import PARAMETERS
-from .api import find_mirror_pairs, symmetrize
 
 bind_when_pymeshlab_imported()
 

@@ -25,8 +25,8 @@ from scipy.interpolate import RBFInterpolator
 
 import filter_symblend  # noqa: F401  (binds the filter)
 from filter_symblend import SymblendWarning, symmetrize
-from filter_symblend.testing import synthetic
 from filter_symblend.core import splines, warp
+from filter_symblend.testing import synthetic
 
 SHARED = pathlib.Path(__file__).resolve().parents[2] / "shared" / "data"
 COW = pathlib.Path(pymeshlab.__file__).parent / "tests" / "sample_meshes" / "cow.obj"

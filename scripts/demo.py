@@ -16,10 +16,10 @@ import numpy as np
 import pymeshlab
 
 import filter_symblend  # noqa: F401  (binds MeshSet.generate_symmetrized_mesh)
-from filter_symblend.testing import synthetic
-from filter_symblend.core.landmark_asymmetry import fit_mirror_plane
 from filter_symblend.core.geometry import similarity_fit
+from filter_symblend.core.landmark_asymmetry import fit_mirror_plane
 from filter_symblend.meshlab.layer_checks import two_way_hausdorff
+from filter_symblend.testing import synthetic
 
 COW = pathlib.Path(pymeshlab.__file__).parent / "tests" / "sample_meshes" / "cow.obj"
 

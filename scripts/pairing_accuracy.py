@@ -19,9 +19,9 @@ import time
 import numpy as np
 import pymeshlab
 
-from filter_symblend.testing import synthetic
 from filter_symblend.core.mesh_quantities import farthest_point_order
 from filter_symblend.landmarks.geometric_pairing import pair_by_geometry
+from filter_symblend.testing import synthetic
 
 SHARED = pathlib.Path(__file__).resolve().parents[2] / "shared" / "data"
 MESHES = {"cow": pathlib.Path(pymeshlab.__file__).parent / "tests" / "sample_meshes" / "cow.obj",

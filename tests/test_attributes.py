@@ -6,9 +6,9 @@ import pytest
 
 import filter_symblend
 from filter_symblend import LandmarkError
-from filter_symblend.testing import synthetic
-from filter_symblend.meshlab.attributes import read_landmark_attributes, write_landmark_attributes
 from filter_symblend.core.landmark_pairs import LandmarkPairs
+from filter_symblend.meshlab.attributes import read_landmark_attributes, write_landmark_attributes
+from filter_symblend.testing import synthetic
 
 from test_ground_truth import midline_vertices
 from test_validation import assert_unchanged, cube_pairs, snapshot

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from filter_symblend import SymblendWarning, symmetrize
-from filter_symblend.testing import synthetic
 from filter_symblend.auto import AutoConfig
 from filter_symblend.auto.spectral import intrinsic_mirror, working_mesh
+from filter_symblend.testing import synthetic
 
 from conftest import symmetric_blob, twins
 

@@ -14,11 +14,11 @@ from filter_symblend import (GeometryError, LandmarkError, ParameterError, Symbl
 from filter_symblend.auto import AutoConfig
 from filter_symblend.auto.maps import plane_map
 from filter_symblend.auto.surface import Surface
-from filter_symblend.testing import synthetic
 from filter_symblend.auto.twins import find_twins
 from filter_symblend.core.mesh_quantities import mean_spacing, vertex_normals
 from filter_symblend.core.mirror_fill import closest_points_on_surface
 from filter_symblend.measures.surface_asymmetry import mirror_asymmetry
+from filter_symblend.testing import synthetic
 
 from conftest import SAMPLE_MESHES, SHARED_DATA, load_ground_truth, meshset_with_pairs, symmetric_blob, twins
 

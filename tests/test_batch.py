@@ -9,11 +9,11 @@ import pymeshlab
 import pytest
 
 from filter_symblend import SymblendError
-from filter_symblend.testing import synthetic
 from filter_symblend.commands.batch import read_manifest, run
 from filter_symblend.commands.main import main
 from filter_symblend.core.landmark_asymmetry import fit_mirror_plane
 from filter_symblend.landmarks.formats import Landmark, LandmarkSet, read_landmarks, write_landmarks
+from filter_symblend.testing import synthetic
 from conftest import SAMPLE_MESHES
 
 BENDS = {"cow_a": 0.2, "cow_b": 0.4, "cow_c": 0.6}

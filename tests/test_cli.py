@@ -11,8 +11,8 @@ import pymeshlab
 import pytest
 
 from filter_symblend import DISPLAY_NAME, PARAMETERS
-from filter_symblend.testing import synthetic
 from filter_symblend.commands.main import main
+from filter_symblend.testing import synthetic
 from conftest import meshlab_mirror_distance
 from filter_symblend.landmarks.formats import Landmark, LandmarkSet, read_landmarks, write_landmarks
 

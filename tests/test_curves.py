@@ -7,14 +7,14 @@ import pytest
 from scipy.spatial import cKDTree
 
 from filter_symblend import LandmarkError, SymblendWarning, symmetrize
-from filter_symblend.testing import synthetic
-from filter_symblend.landmarks.curves import add_curve_pairs, find_curves
-from filter_symblend.landmarks.formats import Landmark, LandmarkSet
+from filter_symblend.core.mesh_graph import edge_graph
 from filter_symblend.core.mesh_quantities import farthest_point_order
 from filter_symblend.core.neighbourhoods import mean_nearest_spacing
+from filter_symblend.landmarks.curves import add_curve_pairs, find_curves
+from filter_symblend.landmarks.formats import Landmark, LandmarkSet
 from filter_symblend.landmarks.pairing import snap_pairs
-from filter_symblend.core.mesh_graph import edge_graph
 from filter_symblend.landmarks.semilandmarks import arc_lengths, equal_arc_samples, resample_curve, surface_path
+from filter_symblend.testing import synthetic
 
 from conftest import symmetric_blob, twins
 

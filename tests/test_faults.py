@@ -7,8 +7,8 @@ import pymeshlab
 import pytest
 
 from filter_symblend import GeometryError, symmetrize
-from filter_symblend.testing import synthetic
 from filter_symblend.commands.main import main
+from filter_symblend.testing import synthetic
 
 
 @pytest.fixture()

@@ -8,11 +8,11 @@ import numpy as np
 import pymeshlab
 import pytest
 
-from filter_symblend.testing import synthetic
-from filter_symblend.core.landmark_asymmetry import fit_mirror_plane
-from filter_symblend.measures.verdict import LEFT_ASYMMETRIC
 from filter_symblend.commands.main import main
+from filter_symblend.core.landmark_asymmetry import fit_mirror_plane
 from filter_symblend.landmarks.formats import Landmark, LandmarkSet, write_landmarks
+from filter_symblend.measures.verdict import LEFT_ASYMMETRIC
+from filter_symblend.testing import synthetic
 from conftest import meshset_with_pairs, symmetric_blob, twins
 
 KEYS = ("p50", "p90", "p99", "rms", "max", "mean")

@@ -8,9 +8,9 @@ import pytest
 
 import filter_symblend
 from filter_symblend import DISPLAY_NAME, PARAMETERS, ScriptError, apply_filter_script, save_filter_script
-from filter_symblend.testing import synthetic
-from filter_symblend.meshlab.filter_script import read_filter_script, symblend_options
 from filter_symblend.measures.surface_asymmetry import mirror_distances
+from filter_symblend.meshlab.filter_script import read_filter_script, symblend_options
+from filter_symblend.testing import synthetic
 from conftest import meshset_with_pairs
 
 PRESETS = pathlib.Path(__file__).resolve().parents[1] / "mlx_presets"

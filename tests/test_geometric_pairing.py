@@ -7,13 +7,13 @@ import pymeshlab
 import pytest
 
 from filter_symblend import LandmarkError
-from filter_symblend.testing import synthetic
 from filter_symblend.commands.main import main
 from filter_symblend.core.geometry import reflection_across_plane
 from filter_symblend.core.mesh_quantities import farthest_point_order
 from filter_symblend.landmarks.formats import Landmark, LandmarkSet, write_landmarks
 from filter_symblend.landmarks.from_file import pairs_from_landmark_file
 from filter_symblend.landmarks.geometric_pairing import pair_by_geometry
+from filter_symblend.testing import synthetic
 
 PAIRS, MIDLINE = 14, 12
 

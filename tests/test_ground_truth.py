@@ -7,10 +7,10 @@ import pytest
 from scipy.spatial import cKDTree
 
 from filter_symblend import SymblendWarning, symmetrize
-from filter_symblend.testing import synthetic
 from filter_symblend.core.baseline import mirror_average
 from filter_symblend.core.geometry import reflection_across_plane, rigid_fit
 from filter_symblend.core.mesh_quantities import farthest_point_order
+from filter_symblend.testing import synthetic
 
 MODES = ["standard", "affine", "articulated"]
 

@@ -9,14 +9,14 @@ import pytest
 from scipy.spatial import cKDTree
 
 from filter_symblend import SymblendWarning, SymmetryNotFoundError
-from filter_symblend.testing import synthetic
 from filter_symblend.auto.config import DEFAULT
+from filter_symblend.testing import synthetic
 from filter_symblend.auto.intrinsic_start import (DESCRIPTOR_AGREEMENT, cannot_start, descriptor_disagreement,
                                                   intrinsic_start)
 from filter_symblend.auto.rounds import plane_asymmetry, surface_asymmetry
 from filter_symblend.auto.surface import build_surface
-from filter_symblend.core.mirror_planes import surface_mirror_planes
 from filter_symblend.core.landmark_pairs import check_landmarks
+from filter_symblend.core.mirror_planes import surface_mirror_planes
 from filter_symblend.core.solve import solve
 from conftest import SAMPLE_MESHES, symmetric_blob, twins
 

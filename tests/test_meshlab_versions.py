@@ -7,8 +7,8 @@ import pymeshlab
 import pytest
 
 from filter_symblend import DISPLAY_NAME, PARAMETERS, ScriptError, apply_filter_script
-from filter_symblend.testing import synthetic
 from filter_symblend.meshlab import filter_names
+from filter_symblend.testing import synthetic
 from conftest import meshset_with_pairs
 
 TABLE = json.loads(filter_names.HISTORY_FILE.read_text())

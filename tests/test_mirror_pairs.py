@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from filter_symblend import MirrorPairs, ParameterError, find_mirror_pairs
-from filter_symblend.testing import synthetic
-from filter_symblend.auto.config import DEFAULT
 from filter_symblend.auto.confidence import mirror_pairs
+from filter_symblend.auto.config import DEFAULT
 from filter_symblend.auto.maps import MirrorMap, plane_map
 from filter_symblend.auto.surface import build_surface
 from filter_symblend.core.mirror_pairs import CONFIDENT
+from filter_symblend.testing import synthetic
 
 pytestmark = pytest.mark.auto
 

@@ -6,11 +6,11 @@ import scipy.sparse as sp
 from scipy.interpolate import RBFInterpolator
 from scipy.sparse.csgraph import connected_components
 
+from filter_symblend.core import iterative_warp, splines, warp
 from filter_symblend.core.geometry import MIRROR_X, minimal_rotation, rotation_about_axis
 from filter_symblend.core.global_solve import MINUS_X, global_solve
 from filter_symblend.core.local_symmetries import local_symmetries
 from filter_symblend.core.neighbourhoods import pair_weights
-from filter_symblend.core import iterative_warp, splines, warp
 from filter_symblend.errors import SymblendWarning
 
 MODES = ["standard", "affine", "articulated"]

@@ -5,8 +5,8 @@ import pytest
 
 from filter_symblend import LandmarkError, SymblendWarning
 from filter_symblend.landmarks.formats import Landmark, LandmarkFileError, LandmarkSet
-from filter_symblend.meshlab.attributes import pair_labels
 from filter_symblend.landmarks.pairing import pair_by_name, read_pair_table, snap_pairs
+from filter_symblend.meshlab.attributes import pair_labels
 
 
 def test_pairing_by_name_conventions():

@@ -9,7 +9,6 @@ import pymeshlab
 import pytest
 
 from filter_symblend import UNCERTAINTY_ATTRIBUTE, GeometryError, ParameterError, symmetrize
-from filter_symblend.testing import synthetic
 from filter_symblend.commands.main import main
 from filter_symblend.core import uncertainty
 from filter_symblend.core.geometry import rigid_fit
@@ -18,6 +17,7 @@ from filter_symblend.landmarks.formats import Landmark, LandmarkSet, write_landm
 from filter_symblend.meshlab.attributes import optional_attribute
 from filter_symblend.meshlab.ply_attributes import read_ply_vertex_properties
 from filter_symblend.parameters import CORE, DEFAULTS, options_of
+from filter_symblend.testing import synthetic
 from conftest import meshset_with_pairs
 
 

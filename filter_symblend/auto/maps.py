@@ -17,8 +17,8 @@ import dataclasses
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..core.mirror_planes import fit_surface_mirror_plane
 from ..core.geometry import normalize, reflection_across_plane, whitening
+from ..core.mirror_planes import fit_surface_mirror_plane
 from .config import AutoConfig
 from .field import MirrorField
 from .growth import local_maps

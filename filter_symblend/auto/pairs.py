@@ -27,9 +27,9 @@ import dataclasses
 import numpy as np
 
 from ..core.geometry import bounding_diagonal, voxel_grid
+from ..core.landmark_pairs import LandmarkPairs, check_landmarks
 from ..core.mesh_graph import one_pair_per_vertex
 from ..core.surface_points import vertex_points
-from ..core.landmark_pairs import LandmarkPairs, check_landmarks
 from ..errors import GeometryError
 from .config import AutoConfig
 from .connectivity import ring_consistent, tessellation_mirror

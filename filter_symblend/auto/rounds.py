@@ -25,14 +25,14 @@ from scipy.sparse.csgraph import connected_components
 
 from ..core.geometry import reflection_across_plane
 from ..core.landmark_asymmetry import fit_mirror_plane
-from ..core.neighbourhoods import connecting_width, mean_nearest_spacing, pair_weights
 from ..core.landmark_pairs import LandmarkPairs, check_landmarks
+from ..core.neighbourhoods import connecting_width, mean_nearest_spacing, pair_weights
 from ..core.solve import SymmetrizationResult, scaled_progress, solve
 from ..errors import DegenerateNeighbourhoodError, GeometryError, SymblendWarning, SymmetryNotFoundError
 from ..parameters import CORE, options_of
+from .confidence import doubtful_map_warning, mirror_pairs
 from .config import DEFAULT, AutoConfig
 from .field import MirrorField, field_centres, register
-from .confidence import doubtful_map_warning, mirror_pairs
 from .first_map import coverage, first_map
 from .intrinsic_start import cannot_start, intrinsic_start
 from .maps import MirrorMap, field_map, plane_map

@@ -21,9 +21,9 @@ from scipy.spatial import cKDTree
 
 from ..core.geometry import bounding_diagonal, flat_normal, normalize
 from ..core.mesh_graph import vertex_adjacency
-from ..core.surface_points import barycentric, vertex_points
 from ..core.mesh_quantities import vertex_normals
 from ..core.mirror_fill import TriangleSurface
+from ..core.surface_points import barycentric, vertex_points
 from .config import DEFAULT, AutoConfig
 
 

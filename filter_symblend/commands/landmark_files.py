@@ -9,8 +9,8 @@ from ..core.landmark_pairs import check_pairs
 from ..errors import SymblendError
 from ..landmarks.formats import read_landmarks, write_landmarks
 from ..landmarks.from_file import AmbiguousPairingError
-from .mesh_io import check_outputs, load_mesh
 from .landmark_input import geometric_pairing_note, snapped_pairs, write_pair_table_for
+from .mesh_io import check_outputs, load_mesh
 from .options import add_landmark_options, add_specimen_option
 
 

@@ -6,14 +6,14 @@ from __future__ import annotations
 import pathlib
 import sys
 
+from ..api import find_mirror_pairs
 from ..core.mirror_pairs import pairs_to_check
 from ..errors import SymblendError
 from ..landmarks.formats import Landmark, LandmarkSet, write_landmarks
 from ..parameters import ARRAYS, PARAMETERS, options_of
-from ..api import find_mirror_pairs
 from .console import progress_display
-from .mesh_io import check_outputs, load_mesh
 from .landmark_input import snapped_pairs
+from .mesh_io import check_outputs, load_mesh
 from .options import add_filter_options, add_landmark_options
 
 DEFAULT_COUNT = 20  # pairs a person checks by eye in a few minutes

@@ -12,8 +12,8 @@ from ..meshlab.filter_script import read_filter_script, symblend_options
 from ..meshlab.script_runner import apply_filter_script
 from ..parameters import DEFAULTS
 from .console import progress_display
-from .mesh_io import check_outputs, load_mesh, save_with_report
 from .landmark_input import write_landmarks
+from .mesh_io import check_outputs, load_mesh, save_with_report
 from .options import add_landmark_options, add_missing_option
 
 

@@ -9,9 +9,9 @@ import sys
 import numpy as np
 
 from ..atomic import all_or_none
+from ..core.mirror_fill import distances_to_surface
 from ..measures.surface_asymmetry import CHECK_SAMPLES
 from ..measures.verdict import result_warnings
-from ..core.mirror_fill import distances_to_surface
 from ..meshlab.attributes import optional_attribute
 from ..meshlab.layer_checks import compare_layers
 from ..meshlab.meshset_filter import UNCERTAINTY_ATTRIBUTE

@@ -9,8 +9,8 @@ from ..errors import SymblendError
 from ..meshlab.meshset_filter import generate_symmetrized_mesh
 from ..parameters import PARAMETERS
 from .console import progress_display
-from .mesh_io import check_outputs, load_mesh, save_with_report
 from .landmark_input import write_landmarks
+from .mesh_io import check_outputs, load_mesh, save_with_report
 from .options import add_symmetrize_arguments
 
 

@@ -16,8 +16,8 @@ from .geometry import bounding_diagonal, flat_normal, minimal_rotation, normaliz
 from .global_solve import MINUS_X, global_solve
 from .landmark_asymmetry import fit_mirror_plane
 from .landmark_pairs import LandmarkPairs, midline_labels
-from .mirror_pairs import MirrorPairs
 from .local_symmetries import LocalSymmetries, local_symmetries
+from .mirror_pairs import MirrorPairs
 from .neighbourhoods import mean_nearest_spacing, pair_weights, require_connected, scaled_weights
 from .splines import thin_plate_spline
 

@@ -8,9 +8,9 @@ import numpy as np
 import pymeshlab
 from scipy.spatial import cKDTree
 
+from ..errors import LandmarkError
 from ..measures.hausdorff import two_way_distance
 from ..measures.surface_asymmetry import CHECK_SAMPLES, before_and_after, pairs_plane
-from ..errors import LandmarkError
 from .attributes import read_landmark_attributes
 from .meshset_filter import TWIN_ATTRIBUTE
 

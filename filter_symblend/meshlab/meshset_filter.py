@@ -21,13 +21,13 @@ from concurrent.futures import Future, ThreadPoolExecutor
 import numpy as np
 import pymeshlab
 
-from . import recording
+from ..errors import MeshSetError, ParameterError, SymblendWarning
 from ..measures.hausdorff import two_way_distance
 from ..measures.surface_asymmetry import input_asymmetry, input_planes, output_asymmetry, pairs_plane
 from ..measures.verdict import nothing_to_restore, result_warnings
-from ..errors import MeshSetError, ParameterError, SymblendWarning
 from ..parameters import keyword_signature, parameters_doc, validate_parameters
 from ..pipeline import build_problem, solve_problem
+from . import recording
 from .attributes import landmarks_from_attributes, read_attributes
 from .output_layer import (ASYMMETRY_ATTRIBUTE, CONFIDENCE_ATTRIBUTE, TWIN_ATTRIBUTE, UNCERTAINTY_ATTRIBUTE,
                            add_output_layer)
@@ -77,7 +77,7 @@ def _fingerprint(mesh: pymeshlab.Mesh, options: dict, found: dict[str, np.ndarra
     for array in (mesh.vertex_matrix(), mesh.face_matrix(), mesh.vertex_selection_array(),
                   mesh.face_selection_array()):
         digest.update(np.ascontiguousarray(array).tobytes())
-    for name in (options["pair_attribute"], options["midline_attribute"], options["weight_attribute"]):
+    for name in (options[option] for option in _ATTRIBUTE_OPTIONS):
         values = found.get(name)
         digest.update(b"-" if values is None else values.tobytes())
     return digest.hexdigest()
@@ -121,7 +121,7 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, found: dict, progress, pool: T
                              found.get(options["weight_attribute"]))
     missing, missing_faces = (None, None) if region is None else region
     landmarks = {}
-    if options["pairs"] != "auto":  # with automatic pairs alone, the landmark attributes are not read
+    if options["pairs"] != "auto":  # with automatic pairs alone, the landmark attributes are only carried
         pairs = landmarks_from_attributes(found, mesh.label(), *(options[name] for name in _ATTRIBUTE_OPTIONS))
         landmarks = dict(left=pairs.left, right=pairs.right, pair_ids=pairs.ids, midline=pairs.midline,
                          left_weights=pairs.left_weights, right_weights=pairs.right_weights)

@@ -8,8 +8,8 @@ import statistics
 import numpy as np
 
 from filter_symblend import symmetrize
-from filter_symblend.testing import synthetic
 from filter_symblend.core.baseline import mirror_average
+from filter_symblend.testing import synthetic
 
 from .common import MESHES, load, table_meshes
 

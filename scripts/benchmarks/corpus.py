@@ -13,12 +13,12 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from filter_symblend import SymblendError, symmetrize
-from filter_symblend.measures.hausdorff import two_way_distance
-from filter_symblend.measures.surface_asymmetry import mirror_distances
 from filter_symblend.core.geometry import flat_normal, reflection_across_plane, voxel_grid
 from filter_symblend.core.mesh_graph import vertex_adjacency
 from filter_symblend.core.mirror_fill import distances_to_surface
 from filter_symblend.core.mirror_planes import fit_surface_mirror_plane
+from filter_symblend.measures.hausdorff import two_way_distance
+from filter_symblend.measures.surface_asymmetry import mirror_distances
 from filter_symblend.testing import synthetic
 from filter_symblend.testing.remeshing import remeshed
 from filter_symblend.testing.surface_truth import vertex_truth

@@ -31,10 +31,10 @@ import time
 import numpy as np
 
 from filter_symblend import SymblendError, symmetrize
-from filter_symblend.measures.surface_asymmetry import mirror_asymmetry
 from filter_symblend.core.landmark_asymmetry import fit_mirror_plane
 from filter_symblend.core.mesh_quantities import farthest_point_order
 from filter_symblend.core.mirror_pairs import CONFIDENT
+from filter_symblend.measures.surface_asymmetry import mirror_asymmetry
 
 from .common import quiet
 

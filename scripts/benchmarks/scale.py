@@ -9,12 +9,12 @@ import numpy as np
 import pymeshlab
 
 from filter_symblend import symmetrize
-from filter_symblend.testing import synthetic
 from filter_symblend.core import splines, warp
 from filter_symblend.core.baseline import mirror_average
 from filter_symblend.core.global_solve import global_solve
 from filter_symblend.core.local_symmetries import local_symmetries
 from filter_symblend.core.neighbourhoods import mean_nearest_spacing, pair_weights, require_connected
+from filter_symblend.testing import synthetic
 
 from .common import IGEA, SCAN_OPTIONS, igea_meshes, measured, scan_pairs, subdivided_cows
 

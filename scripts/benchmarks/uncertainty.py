@@ -20,8 +20,8 @@ import numpy as np
 import pymeshlab
 
 from filter_symblend import symmetrize
-from filter_symblend.testing import synthetic
 from filter_symblend.core.geometry import similarity_fit
+from filter_symblend.testing import synthetic
 
 from .common import MESHES, load, measured, quiet
 
