@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import inspect
 
+from .core.landmark_pairs import LandmarkPairs
 from .core.mirror_pairs import MirrorPairs
 from .core.solve import SymmetrizationResult
 from .errors import ParameterError
@@ -17,8 +18,10 @@ from .pipeline import build_problem, solve_problem
 def symmetrize(points, left=None, right=None, pair_ids=None, midline=None, left_weights=None,
                right_weights=None, progress=None, faces=None, auto_excluded=None, auto_config=None,
                missing=None, missing_faces=None, **params) -> SymmetrizationResult:
-    problem = build_problem(points, validate_parameters(params, ARRAYS), left, right, pair_ids, midline, left_weights,
-                            right_weights, faces, auto_excluded, auto_config, missing, missing_faces)
+    given = None if left is None and right is None and midline is None else \
+        LandmarkPairs(pair_ids, left, right, midline, left_weights, right_weights)
+    problem = build_problem(points, validate_parameters(params, ARRAYS), given, faces, auto_excluded, auto_config,
+                            missing, missing_faces)
     return solve_problem(problem, progress)
 
 

@@ -20,8 +20,9 @@ class LandmarkPairs:
     label in messages) joining ``left[k]`` (+k) and ``right[k]`` (-k); ``midline`` (m,) the vertices of
     midline landmarks (on the symmetry plane); ``left_weights``, ``right_weights`` (n,) >= 0, how much each
     landmark's input geometry counts (0: a missing side; above 1: a pair that counts more; all 1 when not
-    given). Readers (files, attributes, pairing) build them as found; :func:`check_landmarks` checks them
-    against a mesh, once, and everything after it trusts them."""
+    given). Readers (files, attributes, pairing) and the array API build them as found (the array API's
+    may hold None or lists); :func:`check_landmarks` checks them against a mesh, once, into arrays, and
+    everything after it trusts them."""
 
     ids: np.ndarray
     left: np.ndarray
@@ -32,7 +33,7 @@ class LandmarkPairs:
 
     def __post_init__(self):
         for side in ("left_weights", "right_weights"):
-            if getattr(self, side) is None:
+            if getattr(self, side) is None and isinstance(self.ids, np.ndarray):  # a reader's: labels known
                 object.__setattr__(self, side, np.ones(len(self.ids)))
 
 

@@ -120,13 +120,11 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, found: dict, progress, pool: T
     region = _missing_region(mesh, options["missing_region"], options["weight_attribute"],
                              found.get(options["weight_attribute"]))
     missing, missing_faces = (None, None) if region is None else region
-    landmarks = {}
-    if options["pairs"] != "auto":  # with automatic pairs alone, the landmark attributes are only carried
-        pairs = landmarks_from_attributes(found, mesh.label(), *(options[name] for name in _ATTRIBUTE_OPTIONS))
-        landmarks = dict(left=pairs.left, right=pairs.right, pair_ids=pairs.ids, midline=pairs.midline,
-                         left_weights=pairs.left_weights, right_weights=pairs.right_weights)
-    problem = build_problem(mesh.vertex_matrix(), options, faces=mesh.face_matrix(), missing=missing,
-                            missing_faces=missing_faces, **landmarks)
+    landmarks = None  # with automatic pairs alone, the landmark attributes are only carried
+    if options["pairs"] != "auto":
+        landmarks = landmarks_from_attributes(found, mesh.label(), *(options[name] for name in _ATTRIBUTE_OPTIONS))
+    problem = build_problem(mesh.vertex_matrix(), options, landmarks, mesh.face_matrix(), missing=missing,
+                            missing_faces=missing_faces)
     points, faces = problem.points, problem.faces
     diagonal = problem.diagonal
     checks = {}

@@ -42,12 +42,12 @@ class Problem:
         return bounding_diagonal(self.points)
 
 
-def build_problem(points, options: dict, left=None, right=None, pair_ids=None, midline=None, left_weights=None,
-                  right_weights=None, faces=None, auto_excluded=None, auto_config=None, missing=None,
-                  missing_faces=None) -> Problem:
-    """The :class:`Problem` of these arguments (see ``filter_symblend.symmetrize``), in the order above;
-    ``options`` already validated (``parameters.validate_parameters``). Raises ParameterError or
-    LandmarkError / GeometryError naming the argument, pair or vertex at fault."""
+def build_problem(points, options: dict, landmarks: LandmarkPairs | None = None, faces=None, auto_excluded=None,
+                  auto_config=None, missing=None, missing_faces=None) -> Problem:
+    """The :class:`Problem` of these arguments (see ``filter_symblend.symmetrize``), checked in the order of the
+    module doc; ``options`` already validated (``parameters.validate_parameters``), ``landmarks`` as a reader
+    or the caller gave them (unchecked; None: none given). Raises ParameterError or LandmarkError /
+    GeometryError naming the argument, pair or vertex at fault."""
     points = check_points(points)
     faces = _faces(faces, len(points))
     excluded = _excluded_vertices(auto_excluded, len(points), options["pairs"])
@@ -55,15 +55,15 @@ def build_problem(points, options: dict, left=None, right=None, pair_ids=None, m
     if region is not None and options["pairs"] != "landmarks":  # its pairs would pull the intact side toward it
         excluded = np.union1d(np.zeros(0, dtype=np.int64) if excluded is None else excluded,
                               np.flatnonzero(region[0] > 0))
-    given = left is not None or right is not None or midline is not None
-    if options["pairs"] == "auto" and given:
+    if options["pairs"] == "auto" and landmarks is not None:
         raise LandmarkError("`pairs='auto'` finds its own pairs and ignores landmarks; to use "
                             "yours as well, pass pairs='landmarks+auto'.")
-    if options["pairs"] != "auto" and (left is None or right is None):
+    if options["pairs"] != "auto" and (landmarks is None or landmarks.left is None or landmarks.right is None):
         raise LandmarkError(f"`pairs='{options['pairs']}'` needs landmark pairs: pass `left` and "
                             "`right` vertex indices, or use pairs='auto'.")
-    landmarks = None if options["pairs"] == "auto" else check_landmarks(points, left, right, pair_ids, midline,
-                                                                        left_weights, right_weights)
+    if landmarks is not None:
+        landmarks = check_landmarks(points, landmarks.left, landmarks.right, landmarks.ids, landmarks.midline,
+                                    landmarks.left_weights, landmarks.right_weights)
     _check_uncertainty(options, landmarks)
     return Problem(points, faces, landmarks, options, excluded, *(region or (None, None)),
                    auto_config or DEFAULT)
