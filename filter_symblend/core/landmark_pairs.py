@@ -36,6 +36,12 @@ class LandmarkPairs:
             if getattr(self, side) is None and isinstance(self.ids, np.ndarray):  # a reader's: labels known
                 object.__setattr__(self, side, np.ones(len(self.ids)))
 
+    def both_sides(self) -> tuple[np.ndarray, np.ndarray]:
+        """(left, right) vertices (c,) of the pairs given on both sides (weight > 0 on each): the pairs that
+        say where the mirror plane is."""
+        both = (self.left_weights > 0) & (self.right_weights > 0)
+        return self.left[both], self.right[both]
+
 
 def midline_labels(count: int) -> list[str]:
     """Message labels of ``count`` midline landmarks: "midline 1", "midline 2", ..."""

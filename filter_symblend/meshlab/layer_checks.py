@@ -47,8 +47,7 @@ def solved_planes(before: pymeshlab.Mesh, after: pymeshlab.Mesh) -> tuple:
             pairs = read_landmark_attributes(mesh)
         except LandmarkError:  # none, or not the filter's pairs: the figures use the best plane, and say so
             continue
-        both = (pairs.left_weights > 0) & (pairs.right_weights > 0)
-        left, right = pairs.left[both], pairs.right[both]
+        left, right = pairs.both_sides()
         return pairs_plane(points[left], points[right]), pairs_plane(moved[left], moved[right])
     return None, None
 

@@ -38,15 +38,16 @@ _ATTRIBUTE_OPTIONS = ("pair_attribute", "midline_attribute", "weight_attribute")
 WRITTEN = (ASYMMETRY_ATTRIBUTE, TWIN_ATTRIBUTE, CONFIDENCE_ATTRIBUTE, UNCERTAINTY_ATTRIBUTE)
 
 
-def _missing_region(mesh: pymeshlab.Mesh, region: str, weight_attribute: str, weights: np.ndarray | None):
+def _missing_region(mesh: pymeshlab.Mesh, faces: np.ndarray, region: str, weight_attribute: str,
+                    weights: np.ndarray | None):
     """(missing (N,) in [0, 1], faces excluded from the intact surface (F,) bool) for
-    ``missing_region``, or None for 'none'; ``weights``: the mesh's ``weight_attribute`` (None: it has none)."""
+    ``missing_region``, or None for 'none'; ``faces`` (F, 3): the mesh's, as read; ``weights``: the mesh's
+    ``weight_attribute`` (None: it has none)."""
     if region == "none":
         return None
     if mesh.is_point_cloud():
         raise MeshSetError(f"`missing_region='{region}'` needs faces to mirror, and the current mesh "
                            f"('{mesh.label()}') is a point cloud; use missing_region='none'.")
-    faces = mesh.face_matrix()
     if region == "weight":
         if weights is None:
             raise MeshSetError(
@@ -106,8 +107,8 @@ def _solved_plane(points: np.ndarray, landmarks, mirror_pairs):
     ``landmarks``' pairs with both sides given (weight > 0); None when they do not fix one."""
     if mirror_pairs is not None:
         return pairs_plane(points[mirror_pairs.vertex], mirror_pairs.twins_on(points))
-    both = (landmarks.left_weights > 0) & (landmarks.right_weights > 0)
-    return pairs_plane(points[landmarks.left[both]], points[landmarks.right[both]])
+    left, right = landmarks.both_sides()
+    return pairs_plane(points[left], points[right])
 
 
 def _compute(mesh: pymeshlab.Mesh, options: dict, found: dict, progress, pool: ThreadPoolExecutor, seconds: dict):
@@ -117,13 +118,14 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, found: dict, progress, pool: T
     valid, each against the solved pairs' plane on its surface (measures/surface_asymmetry): the input's
     beside the warp with landmark pairs, once they are known with automatic pairs; the output's once the
     warp is known. Each check's own seconds go to ``seconds`` under its report key."""
-    region = _missing_region(mesh, options["missing_region"], options["weight_attribute"],
+    faces = mesh.face_matrix()
+    region = _missing_region(mesh, faces, options["missing_region"], options["weight_attribute"],
                              found.get(options["weight_attribute"]))
     missing, missing_faces = (None, None) if region is None else region
     landmarks = None  # with automatic pairs alone, the landmark attributes are only carried
     if options["pairs"] != "auto":
         landmarks = landmarks_from_attributes(found, mesh.label(), *(options[name] for name in _ATTRIBUTE_OPTIONS))
-    problem = build_problem(mesh.vertex_matrix(), options, landmarks, mesh.face_matrix(), missing=missing,
+    problem = build_problem(mesh.vertex_matrix(), options, landmarks, faces, missing=missing,
                             missing_faces=missing_faces)
     points, faces = problem.points, problem.faces
     diagonal = problem.diagonal
