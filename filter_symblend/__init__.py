@@ -14,6 +14,7 @@ import importlib
 
 from .api import find_mirror_pairs, symmetrize
 from .core.mirror_pairs import MirrorPairs
+from .core.report import Report
 from .core.solve import SymmetrizationResult
 from .errors import (GeometryError, LandmarkError, MeshSetError, ParameterError, SymblendError,
                      SymblendWarning, SymmetryNotFoundError)
@@ -31,7 +32,8 @@ _MESHLAB_NAMES = {  # loaded on first use, with pymeshlab
 }
 
 __all__ = [
-    "PARAMETERS", "GeometryError", "LandmarkError", "MeshSetError", "MirrorPairs", "ParameterError", "SymblendError",
+    "PARAMETERS", "GeometryError", "LandmarkError", "MeshSetError", "MirrorPairs", "ParameterError", "Report",
+    "SymblendError",
     "SymblendWarning", "SymmetrizationResult", "SymmetryNotFoundError", "find_mirror_pairs", "pairs_from_landmark_file",
     "symmetrize", *sorted(_MESHLAB_NAMES),
 ]

@@ -82,7 +82,8 @@ Returns
 -------
 SymmetrizationResult
     ``points`` (N, 3) output, ``asymmetry`` (N,) distance moved per vertex,
-    ``report`` dict (see the docs).
+    ``report`` (a :class:`~filter_symblend.core.report.Report`: typed
+    attributes; ``report.to_dict()`` is the JSON form, docs/method.md).
 
 Raises
 ------
@@ -95,7 +96,7 @@ Examples
 >>> from filter_symblend.testing import synthetic
 >>> points, faces = synthetic.icosphere(3)
 >>> result = filter_symblend.symmetrize(synthetic.bend(synthetic.bumpy(points), 0.3), faces=faces, pairs="auto")
->>> result.report["auto_pairs"]["twins_are"]
+>>> result.report.auto_pairs.twins_are
 'exact vertices'
 """
 
@@ -117,7 +118,7 @@ def find_mirror_pairs(points, faces=None, left=None, right=None, pair_ids=None, 
     >>> from filter_symblend.testing import synthetic
     >>> points, faces = synthetic.icosphere(3)
     >>> twins = filter_symblend.find_mirror_pairs(synthetic.bend(synthetic.bumpy(points), 0.3), faces)
-    >>> bool(twins.report["confident_share"] > 0.9)
+    >>> bool(twins.report.confident_share > 0.9)
     True
     """
     params.setdefault("pairs", "auto" if left is None else "landmarks+auto")

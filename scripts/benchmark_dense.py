@@ -107,7 +107,7 @@ def main(argv=None) -> None:
         if args.accuracy:
             dense = warp.ThinPlateSpline(deformed[landmarks], values)(deformed[others])
             deviation = f"{np.abs(moved - dense).max() / diagonal:.1e}"
-        seconds = result.report["seconds"]
+        seconds = result.report.seconds.to_dict()
         print(f"| {len(left):,} | {seconds['neighbourhoods']:.2f} | {seconds['local_transforms']:.3f} | "
               f"{seconds['global_solve']:.2f} | {fitted - start:.2f} | {evaluated - fitted:.2f} | {core:.2f} | "
               f"{none - core:.2f} | {none:.2f} | {default:.2f} | {rbf} | {spline.description} | {deviation} |",

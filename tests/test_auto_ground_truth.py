@@ -41,10 +41,10 @@ def test_a_remeshed_deformed_cow_comes_back_more_symmetric_than_100_landmarks_ma
     alone = _landmarks_alone(deformed, *truth.landmarks(100), "affine")
     errors = [truth.symmetry_error(p) for p in (deformed, automatic.points, alone.points)]
     print(deformation, "symmetry error input / auto / 100 landmarks:", errors)
-    report = automatic.report["auto_pairs"]
-    assert report["twins_are"] == "points of the surface"
+    report = automatic.report.auto_pairs
+    assert report.twins_are == "points of the surface"
     assert errors[1] < errors[2] and errors[1] < 0.1 * errors[0]
-    assert 0.5 < report["consistency"] <= 1.0
+    assert 0.5 < report.consistency <= 1.0
 
 
 def test_a_remeshed_cow_bent_strongly_is_not_refused(remeshed_cow):
@@ -113,7 +113,7 @@ def test_the_parts_of_a_body_of_revolution_decide_its_mirror_plane():
     rotation = np.linalg.lstsq(np.column_stack([points, np.ones(len(points))]), posed, rcond=None)[0][:3].T
     result = symmetrize(posed, faces=faces, pairs="auto")
     diagonal = np.linalg.norm(np.ptp(points, axis=0))
-    cosine = abs(np.dot(result.report["plane_normal"], rotation @ [0.0, 1.0, 0.0]))
+    cosine = abs(np.dot(result.report.plane.normal, rotation @ [0.0, 1.0, 0.0]))
     assert cosine > np.cos(np.radians(0.1))
     assert np.abs(result.points - posed).max() < 1e-6 * diagonal
 

@@ -46,10 +46,10 @@ def test_an_exactly_symmetric_mesh_in_any_pose_comes_back_unchanged(blob):
         rotation = np.linalg.lstsq(np.column_stack([points, np.ones(len(points))]), posed, rcond=None)[0][:3].T
         result = symmetrize(posed, faces=faces, pairs="auto", mode=mode)
         assert np.abs(result.points - posed).max() < 1e-6 * diagonal
-        angle = np.degrees(np.arccos(min(1.0, abs(np.dot(result.report["plane_normal"], rotation @ [1.0, 0, 0])))))
+        angle = np.degrees(np.arccos(min(1.0, abs(np.dot(result.report.plane.normal, rotation @ [1.0, 0, 0])))))
         assert angle < 0.1
-        auto = result.report["auto_pairs"]
-        assert auto["twins_are"] == "exact vertices" and auto["midline_count"] > 0
+        auto = result.report.auto_pairs
+        assert auto.twins_are == "exact vertices" and auto.midline_count > 0
 
 
 def test_a_plane_gives_an_exactly_symmetric_mesh_its_exact_mirror_vertices(blob):
@@ -85,7 +85,7 @@ def test_a_bent_or_bent_and_compressed_cow_beats_100_landmarks_five_times(cow, c
     print(deformation, "symmetry error auto / 100 landmarks:", errors, "shape:", shapes)
     assert errors[0] < TARGET * errors[1]
     assert shapes[0] <= shapes[1]
-    assert automatic.report["auto_pairs"]["twins_are"] == "exact vertices"
+    assert automatic.report.auto_pairs.twins_are == "exact vertices"
 
 
 @pytest.mark.corpus
@@ -179,9 +179,9 @@ def test_a_flat_shape_is_symmetrized_in_its_plane(sampling):
     for mode in ("standard", "affine", "articulated"):
         result = symmetrize(points, faces=faces, pairs="auto", mode=mode)
         assert (result.points[:, 2] == 0.0).all()
-        plane_normal = np.asarray(result.report["plane_normal"])
+        plane_normal = np.asarray(result.report.plane.normal)
         assert abs(plane_normal[2]) < 1e-12  # the mirror line lies in the plane
-        after = outline_asymmetry(result.points[:120], plane_normal, result.report["plane_offset"])
+        after = outline_asymmetry(result.points[:120], plane_normal, result.report.plane.offset)
         print(mode, "outline asymmetry before / after:", before, after)
         assert after < 0.5 * before
 
@@ -209,7 +209,7 @@ def test_flat_neighbourhoods_of_automatic_pairs_widen_theta(blob):
     points, faces = blob
     bent = synthetic.bend(points, 0.3)
     result = symmetrize(bent, faces=faces, pairs="auto", mode="affine", theta_width=0.5)
-    widths = {entry.get("theta_width") for entry in result.report["auto_pairs"]["rounds"]}
+    widths = {entry.raised_widths.get("theta_width") for entry in result.report.auto_pairs.rounds}
     assert widths == {1.0}
     twin = twins(points)
     left = np.flatnonzero(points[:, 0] > 1e-9)
@@ -224,7 +224,7 @@ def test_a_point_cloud_without_faces_is_paired_by_its_points(blob):
     posed = synthetic.random_rigid(points, 5)
     result = symmetrize(posed, pairs="auto")
     assert np.abs(result.points - posed).max() < 1e-6 * np.linalg.norm(np.ptp(points, axis=0))
-    assert result.report["auto_pairs"]["twins_are"] == "exact vertices"
+    assert result.report.auto_pairs.twins_are == "exact vertices"
 
 
 def test_a_shape_without_mirror_symmetry_is_refused_saying_how_much_mirrors():
@@ -339,8 +339,8 @@ def test_landmarks_plus_auto_makes_every_vertex_pair_more_symmetric(cow, cow_100
     print(deformation, "landmarks alone / with automatic pairs:", error_alone, error_dense)
     assert error_dense < error_alone / 2
     assert synthetic.shape_error(dense.points, cow.points) <= synthetic.shape_error(alone.points, cow.points)
-    assert dense.report["landmark_asymmetry_after"]["max_relative"] < 1e-9  # the user's landmarks stay exact
-    assert dense.report["pair_count"] == 100 and dense.report["auto_pairs"]["pair_count"] > 500
+    assert dense.report.landmark_asymmetry_after.max_relative < 1e-9  # the user's landmarks stay exact
+    assert dense.report.pair_count == 100 and dense.report.auto_pairs.pair_count > 500
 
 
 def _cow_with_a_subtle_dent(cow, depth=0.1):
@@ -363,7 +363,7 @@ def test_excluded_vertices_do_not_pull_the_sound_side_toward_them(cow):
     moved = [np.linalg.norm(out.points[twin] - cow.points[twin], axis=1).max() / spacing for out in (paired, excluded)]
     print("sound twins moved (edges), paired / excluded:", moved)
     assert moved[1] < moved[0] / 10
-    assert excluded.report["auto_pairs"]["excluded_vertices"] == np.count_nonzero(patch)
+    assert excluded.report.auto_pairs.excluded_vertices == np.count_nonzero(patch)
 
 
 def test_excluded_vertices_as_a_mask_or_as_indices_are_the_same_problem(cow):
@@ -424,7 +424,7 @@ def test_progress_covers_every_round(blob):
                         progress=lambda percent, message: seen.append((percent, message)))
     percents = [percent for percent, _ in seen]
     assert percents == sorted(percents) and percents[-1] == 100.0
-    rounds = [entry for entry in result.report["auto_pairs"]["rounds"] if not entry.get("final")]
+    rounds = [entry for entry in result.report.auto_pairs.rounds if not entry.final]
     assert rounds and all(any(f"round {k}" in message for _, message in seen) for k in range(1, len(rounds) + 1))
     assert not any(f"round {len(rounds) + 1}" in message for _, message in seen)
 

@@ -552,7 +552,7 @@ def test_pairs_from_a_landmark_file_in_python_are_what_the_command_uses(bent_cow
     np.testing.assert_array_equal(snapped.pairs.right, right)
     assert snapped.pair_names[0] == ("L_0", "R_0") and snapped.frame_note == "coordinates used as stored"
     result = symmetrize(deformed, snapped.pairs.left, snapped.pairs.right, faces=cow.faces)
-    assert result.report["landmark_asymmetry_after"]["max_relative"] < 1e-9
+    assert result.report.landmark_asymmetry_after.max_relative < 1e-9
 
 
 @pytest.mark.parametrize("mode", ["standard", "affine", "articulated"])

@@ -134,6 +134,6 @@ def test_a_point_cloud_whose_twins_fall_on_shared_points_is_still_paired(cow):
     cloud = ms.current_mesh().vertex_matrix()[:2489]
     both = (cow.all_left < 2489) & (cow.all_right < 2489)
     result = symmetrize(cloud, pairs="auto")
-    assert result.report["auto_pairs"]["twins_are"] == "points of the surface"
+    assert result.report.auto_pairs.twins_are == "points of the surface"
     assert synthetic.symmetry_error(result.points, cow.all_left[both], cow.all_right[both]) < 1e-3  # measured 4.7e-4
     assert synthetic.shape_error(result.points, cloud) < 5e-3  # measured 1.1e-3

@@ -1,5 +1,6 @@
 """End to end on exactly symmetric meshes deformed by known maps (cow; spot when present)."""
 
+import json
 import warnings
 
 import numpy as np
@@ -108,7 +109,7 @@ def test_reported_plane_mirrors_the_output_landmarks(cow, frame):
     left, right = cow.landmarks(100)
     deformed = synthetic.random_rigid(synthetic.bend(cow.points, 1.0), seed=8)
     result = quiet_symmetrize(deformed, left, right, output_frame=frame)
-    normal, offset = np.array(result.report["plane_normal"]), result.report["plane_offset"]
+    normal, offset = np.array(result.report.plane.normal), result.report.plane.offset
     out = result.points
     assert np.abs(reflection_across_plane(out[right], normal, offset) - out[left]).max() < 1e-12 * cow.diagonal
     assert np.all((out[left] - out[right]) @ normal > 0), "normal points toward the left (+k) side"
@@ -134,18 +135,27 @@ def test_report_holds_the_contracted_fields(cow):
     left, right = cow.landmarks(60)
     bent = synthetic.bend(cow.points, 1.0)
     report = quiet_symmetrize(bent, left, right, phi_width=6, theta_width=3).report
-    assert report["pair_count"] == 60
-    assert report["phi_h"] == pytest.approx(6 * report["mean_landmark_spacing"])
-    assert report["theta_h"] == pytest.approx(3 * report["mean_landmark_spacing"])
+    assert report.pair_count == 60
+    widths = report.widths
+    assert widths.phi_h == pytest.approx(6 * widths.mean_landmark_spacing)
+    assert widths.theta_h == pytest.approx(3 * widths.mean_landmark_spacing)
     landmarks = bent[np.concatenate([left, right])]
-    assert report["mean_landmark_spacing"] == pytest.approx(cKDTree(landmarks).query(landmarks, k=2)[0][:, 1].mean())
-    assert report["width_spacing"] == report["mean_landmark_spacing"]
-    given = quiet_symmetrize(bent, left, right, phi_width=6, width_spacing=0.25).report
-    assert given["width_spacing"] == 0.25 and given["phi_h"] == pytest.approx(1.5) and given["theta_h"] == pytest.approx(1.25)
-    before, after = report["landmark_asymmetry_before"], report["landmark_asymmetry_after"]
-    assert before["max"] > before["rms"] > 1e-3 and after["max"] < 1e-12
-    assert before["rms_relative"] == pytest.approx(before["rms"] / report["diagonal"])
-    assert set(report["seconds"]) == {"neighbourhoods", "local_transforms", "global_solve", "warp", "total"}
+    assert widths.mean_landmark_spacing == pytest.approx(cKDTree(landmarks).query(landmarks, k=2)[0][:, 1].mean())
+    assert widths.width_spacing == widths.mean_landmark_spacing
+    given = quiet_symmetrize(bent, left, right, phi_width=6, width_spacing=0.25).report.widths
+    assert given.width_spacing == 0.25 and given.phi_h == pytest.approx(1.5) and given.theta_h == pytest.approx(1.25)
+    before, after = report.landmark_asymmetry_before, report.landmark_asymmetry_after
+    assert before.max > before.rms > 1e-3 and after.max < 1e-12
+    assert before.rms_relative == pytest.approx(before.rms / report.diagonal)
+    assert list(report.seconds.stages) == ["neighbourhoods", "local_transforms", "global_solve", "warp"]
+    assert report.seconds.total == pytest.approx(sum(report.seconds.stages.values()))
+    # the JSON form: the keys the docs list, and nothing that is not JSON
+    saved = json.loads(json.dumps(report.to_dict()))
+    assert saved["phi_h"] == widths.phi_h and saved["landmark_asymmetry_after"]["max_relative"] == after.max_relative
+    assert set(saved["seconds"]) == {"neighbourhoods", "local_transforms", "global_solve", "warp", "total"}
+    assert {"pair_count", "midline_count", "mode", "output_frame", "plane_normal", "plane_offset", "canonical_from_input",
+            "vertex_displacement", "diagonal", "mean_landmark_spacing", "width_spacing", "phi_width", "phi_h",
+            "theta_width", "theta_h", "alpha", "local_fit_residual", "local_stretch", "warp"} <= set(saved)
 
 
 def test_landmark_asymmetry_matches_an_independent_reflection_measure(cow):
@@ -163,7 +173,7 @@ def test_landmark_asymmetry_matches_an_independent_reflection_measure(cow):
         return np.sum((p - reflection_across_plane(q, normal, offset)) ** 2)
 
     best = minimize(cost, [0.0, 0.0], method="BFGS", options={"gtol": 1e-12}).fun
-    assert report["landmark_asymmetry_before"]["rms"] == pytest.approx(np.sqrt(best / len(left)), rel=1e-6)
+    assert report.landmark_asymmetry_before.rms == pytest.approx(np.sqrt(best / len(left)), rel=1e-6)
 
 
 def test_a_grossly_mispaired_landmark_is_reported(cow):
@@ -208,9 +218,9 @@ def test_midline_landmarks_end_up_on_the_symmetry_plane(symmetric_mesh, mode):
     assert np.abs(deformed[midline] @ normal0 - np.median(deformed[midline] @ normal0)).max() > 1e-2 * gt.diagonal
     for frame in ("input", "canonical"):
         result = quiet_symmetrize(deformed, left, right, midline=midline, mode=mode, output_frame=frame)
-        normal, offset = np.array(result.report["plane_normal"]), result.report["plane_offset"]
+        normal, offset = np.array(result.report.plane.normal), result.report.plane.offset
         assert np.abs(result.points[midline] @ normal - offset).max() < 1e-12 * gt.diagonal
-        assert result.report["midline_count"] == 12 and result.report["landmark_asymmetry_after"]["max_relative"] < 1e-12
+        assert result.report.midline_count == 12 and result.report.landmark_asymmetry_after.max_relative < 1e-12
 
 
 def fit_plane_normal(points, left, right):
@@ -251,8 +261,8 @@ def test_the_approximate_warp_keeps_the_pairs_exactly_symmetric_and_the_shape(co
     monkeypatch.setattr(splines, "ITERATIVE_CENTRES", 200)
     monkeypatch.setattr(warp, "SUBSET_CENTRES", 100)
     approximate = quiet_symmetrize(deformed, left, right, mode="affine")
-    assert "through 100 of the 300 landmarks plus local splines of its residual" in approximate.report["warp"]
-    assert approximate.report["landmark_asymmetry_after"]["max_relative"] < 1e-9
+    assert "through 100 of the 300 landmarks plus local splines of its residual" in approximate.report.warp
+    assert approximate.report.landmark_asymmetry_after.max_relative < 1e-9
     np.testing.assert_allclose(approximate.points[left], exact.points[left], atol=1e-9 * cow.diagonal)
     moved = np.abs(approximate.points - exact.points).max() / cow.diagonal
     assert moved < 0.001  # measured 0.00014
@@ -275,8 +285,8 @@ def test_three_pairs_and_four_midline_landmarks_are_enough_in_every_mode(cow, mo
     deformed = synthetic.random_rigid(synthetic.compress(synthetic.bend(cow.points, 0.3), [1, 1, 0], 0.85), seed=3)
     result = symmetrize(deformed, left, right, midline=midline, mode=mode)
     report = result.report
-    assert report["landmark_asymmetry_after"]["max_relative"] < 1e-9
-    normal, offset = np.array(report["plane_normal"]), report["plane_offset"]
+    assert report.landmark_asymmetry_after.max_relative < 1e-9
+    normal, offset = np.array(report.plane.normal), report.plane.offset
     assert np.abs(result.points[midline] @ normal - offset).max() < 1e-9 * cow.diagonal
     before, after = (mirror_asymmetry(p, cow.faces)["mean"] for p in (deformed, result.points))
     assert after < before  # measured: 0.0193 -> 0.0137-0.0150 (diagonal 2.14)
@@ -288,7 +298,7 @@ def test_two_pairs_and_midline_landmarks_start_automatic_pairs(cow):
     left, right, midline = _skull_like_landmarks(cow, 2)
     deformed = synthetic.random_rigid(synthetic.bend(cow.points, 0.4), seed=3)
     result = symmetrize(deformed, left, right, midline=midline, faces=cow.faces, pairs="landmarks+auto")
-    assert result.report["landmark_asymmetry_after"]["max_relative"] < 1e-9
+    assert result.report.landmark_asymmetry_after.max_relative < 1e-9
     before, after = (mirror_asymmetry(p, cow.faces)["mean"] for p in (deformed, result.points))
     assert after < before / 3  # the surface: measured 0.024 -> 0.004 (diagonal 2.14)
     # every true vertex pair: measured 2.1 % -> 1.5 % of the diagonal (2 landmarks pin little of a bend)

@@ -111,12 +111,13 @@ def test_a_run_started_by_the_intrinsic_mirror_says_so_and_other_modes_refuse(co
     with pytest.warns(SymblendWarning) as caught:
         result = symmetrize(posed, faces=cow.faces, pairs="auto", mode="articulated", auto_config=strict)
     assert INTRINSIC_START_WARNING in [str(w.message) for w in caught]
-    report = result.report["auto_pairs"]
-    assert report["intrinsic_start"]["chosen"] in report["intrinsic_start"]["starts"]
-    assert INTRINSIC_START_WARNING in report["warnings"]
+    report = result.report.auto_pairs
+    assert report.intrinsic_start["chosen"] in report.intrinsic_start["starts"]
+    assert report.rounds[0].start == "intrinsic" and INTRINSIC_START_WARNING in report.warnings
+    assert INTRINSIC_START_WARNING in result.report.warnings
     errors = [synthetic.symmetry_error(p, cow.all_left, cow.all_right) for p in (posed, result.points)]
     assert errors[1] < 0.3 * errors[0]  # measured 0.2
-    assert result.mirror_pairs is not None and result.mirror_pairs.report["coverage"] > 0.5
+    assert result.mirror_pairs is not None and result.mirror_pairs.report.coverage > 0.5
     with pytest.raises(SymmetryNotFoundError, match=r"If it is a posed body, mode='articulated' pairs it by its "
                                                      r"intrinsic mirror\. Place landmark pairs"):
         symmetrize(posed, faces=cow.faces, pairs="auto", mode="standard", auto_config=strict)

@@ -147,10 +147,10 @@ def test_the_fill_runs_on_arrays_as_in_the_filter_and_in_either_frame(cow):
     ms.current_mesh().add_vertex_custom_scalar_attribute(1.0 - missing, "symblend_weight")
     ms.generate_symmetrized_mesh(missing_region="weight")
     np.testing.assert_allclose(result.points, ms.current_mesh().vertex_matrix(), atol=1e-9)
-    assert result.report["filled_vertices"] == broken.sum()
+    assert result.report.filled_vertices == broken.sum()
     assert _distance_to_truth(cow, result.points[broken]).max() < _distance_to_truth(cow, bumped[broken]).max() / 3
     canonical = symmetrize(bumped, left, right, faces=cow.faces, missing=missing, output_frame="canonical")
-    transform = np.array(canonical.report["canonical_from_input"])
+    transform = canonical.report.canonical_from_input
     np.testing.assert_allclose(canonical.points, result.points @ transform[:3, :3].T + transform[:3, 3], atol=1e-9)
     with pytest.raises(ParameterError, match=r"`missing` vertices take the mirror shape .* pass `faces`"):
         symmetrize(bumped, left, right, missing=missing)

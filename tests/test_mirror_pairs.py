@@ -41,7 +41,7 @@ def test_twins_of_a_bent_remeshed_cow_are_its_true_twins(bent_remeshed_cow):
     assert np.all((pairs.confidence >= 0) & (pairs.confidence <= 1))
     assert np.all(confidence[np.isnan(twin).any(axis=1)] == 0)
     report = pairs.report
-    assert report["confident_share"] > 0.9 and 0 < report["confident_share"] <= report["coverage"] <= 1
+    assert report.confident_share > 0.9 and 0 < report.confident_share <= report.coverage <= 1
 
 
 def test_symmetrize_reports_the_same_map(bent_remeshed_cow):
@@ -50,7 +50,7 @@ def test_symmetrize_reports_the_same_map(bent_remeshed_cow):
     result = symmetrize(deformed, faces=truth.faces, pairs="auto", mode="affine")
     np.testing.assert_array_equal(result.mirror_pairs.vertex, pairs.vertex)
     np.testing.assert_allclose(result.mirror_pairs.twin, pairs.twin)
-    assert result.report["auto_pairs"]["mirror_map"]["confident_share"] == pairs.report["confident_share"]
+    assert result.report.auto_pairs.mirror_map == pairs.report
 
 
 def test_confidence_finds_the_part_a_map_gets_wrong(remeshed_cow):
@@ -107,7 +107,7 @@ def test_an_automatic_run_in_a_meshset_carries_the_map_on_its_output(bent_remesh
     spacing = np.median(np.linalg.norm(moved[truth.faces[:, 0]] - moved[truth.faces[:, 1]], axis=1))
     error = np.linalg.norm(twin[truth.left][listed] - truth.twins(moved)[listed], axis=1) / spacing
     assert listed.mean() > 0.9 and np.median(error) < 0.25
-    assert report["auto_pairs"]["mirror_map"]["confident_share"] == pytest.approx(pairs.report["confident_share"])
+    assert report["auto_pairs"]["mirror_map"]["confident_share"] == pytest.approx(pairs.report.confident_share)
     ms.set_current_mesh(report["input_mesh_id"])
     assert custom_attribute_names(ms) == {"vs": [], "vp": [], "fs": [], "fp": []}
 
@@ -263,11 +263,11 @@ def test_a_map_wrong_on_much_of_the_surface_warns_with_the_share_and_the_fix(rem
     report = mirror_pairs(MirrorMap("torn", surface, torn, exact.normal, exact.carry), surface, none, DEFAULT).report
     message = doubtful_map_warning(report)
     assert message == (
-        f"only {report['confident_share']:.0%} of the surface has a confident mirror twin (map: torn); the automatic "
+        f"only {report.confident_share:.0%} of the surface has a confident mirror twin (map: torn); the automatic "
         "pairs may mirror the wrong parts. Write them with `symblend pairs MESH -o pairs.pp` (find_mirror_pairs in "
         "Python), check and correct them in MeshLab's PickPoints, then symmetrize with -l pairs.pp; or place "
         "landmark pairs where the per-vertex symblend_pair_confidence is low.")
-    assert report["confident_share"] < 0.6
+    assert report.confident_share < 0.6
 
 
 @pytest.mark.corpus
@@ -286,4 +286,4 @@ def test_the_map_of_a_tosca_man_is_the_published_self_symmetry():
     twin, confidence = pairs.per_vertex()
     errors = twin_errors(twin, points, a, b, np.sqrt(surface_area(points, faces)))
     assert np.mean(errors <= 0.05) > 0.98
-    assert pairs.report["confident_share"] > 0.95
+    assert pairs.report.confident_share > 0.95

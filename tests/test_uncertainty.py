@@ -25,7 +25,7 @@ def _slow_jackknife(points, left, right, mode):
     """Per-vertex jackknife standard error and per-pair influence, each restoration computed in full by
     ``symmetrize`` without one pair, fitted rigidly onto the full one at the common landmarks."""
     full = symmetrize(points, left, right, mode=mode)
-    spacing = full.report["width_spacing"]
+    spacing = full.report.widths.width_spacing
     moved = []
     for j in range(len(left)):
         keep = np.arange(len(left)) != j
@@ -46,14 +46,14 @@ def test_the_jackknife_equals_the_slow_one_restoration_by_restoration(cow, mode)
     left, right = cow.landmarks(16)
     result = symmetrize(points, left, right, mode=mode, uncertainty="jackknife")
     spread, influence = _slow_jackknife(points, left, right, mode)
-    diagonal = result.report["diagonal"]
+    diagonal = result.report.diagonal
     np.testing.assert_allclose(result.uncertainty, spread, atol=1e-7 * diagonal)
-    measured = result.report["uncertainty"]
-    np.testing.assert_allclose([measured["influence_relative"][str(k)] for k in range(1, 17)], influence / diagonal,
+    measured = result.report.uncertainty
+    np.testing.assert_allclose([measured.influence_relative[str(k)] for k in range(1, 17)], influence / diagonal,
                                atol=1e-7)
-    assert measured["most_influential_pair"] == str(np.argmax(influence) + 1)
-    assert measured["left_out"] == 16 and measured["kept_in"] == {}
-    assert measured["p90_relative"] == pytest.approx(np.percentile(spread, 90) / diagonal, rel=1e-6)
+    assert measured.most_influential_pair == str(np.argmax(influence) + 1)
+    assert measured.left_out == 16 and measured.kept_in == {}
+    assert measured.p90_relative == pytest.approx(np.percentile(spread, 90) / diagonal, rel=1e-6)
     assert spread.max() > 1e-4 * diagonal  # a bent, compressed cow from 16 pairs is not known exactly
 
 
@@ -66,7 +66,7 @@ def test_the_jackknife_of_a_flat_drawing_equals_the_slow_one_and_stays_in_its_pl
     left = np.flatnonzero(points[:, 0] > 0.05)[::6]
     result = symmetrize(bent, left, twin[left], uncertainty="jackknife")
     spread, _ = _slow_jackknife(bent, left, twin[left], "standard")
-    np.testing.assert_allclose(result.uncertainty, spread, atol=1e-7 * result.report["diagonal"])
+    np.testing.assert_allclose(result.uncertainty, spread, atol=1e-7 * result.report.diagonal)
     assert spread.max() > 0
 
 
@@ -76,7 +76,7 @@ def test_the_same_restoration_with_and_without_uncertainty(cow):
     plain = symmetrize(points, left, right, mode="affine")
     measured = symmetrize(points, left, right, mode="affine", uncertainty="jackknife")
     np.testing.assert_array_equal(plain.points, measured.points)
-    assert plain.uncertainty is None and "uncertainty" not in plain.report
+    assert plain.uncertainty is None and plain.report.uncertainty is None
 
 
 def test_a_landmark_far_off_its_place_is_the_most_influential(cow):
@@ -90,8 +90,8 @@ def test_a_landmark_far_off_its_place_is_the_most_influential(cow):
         j = int(rng.integers(40))
         distance = np.linalg.norm(cow.points - cow.points[right[j]], axis=1)
         right[j] = np.argmin(np.abs(distance - 0.10 * cow.diagonal))
-        report = symmetrize(points, left, right, uncertainty="jackknife").report["uncertainty"]
-        assert report["most_influential_pair"] == str(j + 1)
+        measured = symmetrize(points, left, right, uncertainty="jackknife").report.uncertainty
+        assert measured.most_influential_pair == str(j + 1)
 
 
 def test_a_pair_that_holds_the_others_together_is_kept_in_and_said():
@@ -101,9 +101,9 @@ def test_a_pair_that_holds_the_others_together_is_kept_in_and_said():
     points = np.vstack([left, left * [-1.0, 1.0, 1.0] + [0.0, 0.0, 0.02]])
     pairs = np.arange(7), np.arange(7, 14)
     result = symmetrize(points, *pairs, phi_width=2.5, uncertainty="jackknife")
-    kept = result.report["uncertainty"]["kept_in"]
+    kept = result.report.uncertainty.kept_in
     assert list(kept) == ["4"] and kept["4"].startswith("The landmark pairs fall apart into 2 groups")
-    assert result.report["uncertainty"]["left_out"] == 6
+    assert result.report.uncertainty.left_out == 6
 
 
 def test_errors_name_the_problem_and_the_fix(cow, monkeypatch):
@@ -141,7 +141,7 @@ def test_the_meshset_filter_writes_the_uncertainty_on_its_output_layer(cow):
     values = ms.current_mesh().vertex_custom_scalar_attribute_array(UNCERTAINTY_ATTRIBUTE)
     expected = symmetrize(points, left, right, mode="affine", uncertainty="jackknife")
     np.testing.assert_allclose(values, expected.uncertainty, rtol=1e-12, atol=1e-15)
-    assert report["uncertainty"]["most_influential_pair"] == expected.report["uncertainty"]["most_influential_pair"]
+    assert report["uncertainty"]["most_influential_pair"] == expected.report.uncertainty.most_influential_pair
     assert optional_attribute(ms.mesh(report["input_mesh_id"]), UNCERTAINTY_ATTRIBUTE) is None  # input untouched
 
 

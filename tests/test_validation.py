@@ -107,8 +107,8 @@ def test_the_minimum_is_a_plane_and_a_warp_not_a_pair_count():
     # ... and a midline landmark off it will do: 2 pairs + 1 midline landmark are the minimum.
     square = np.array([[1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [-1.0, 1.0, 0.0], [0.0, 0.5, 1.0]])
     result = symmetrize(square, [0, 1], [2, 3], midline=[4])
-    assert result.report["landmark_asymmetry_after"]["max_relative"] < 1e-12
-    normal, offset = np.array(result.report["plane_normal"]), result.report["plane_offset"]
+    assert result.report.landmark_asymmetry_after.max_relative < 1e-12
+    normal, offset = np.array(result.report.plane.normal), result.report.plane.offset
     assert abs(result.points[4] @ normal - offset) < 1e-12
 
 

@@ -24,6 +24,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..core.mirror_pairs import CONFIDENT, DOUBTFUL_SHARE, MirrorPairs
+from ..core.report import MirrorMapReport
 from .config import AutoConfig
 from .growth import affine_mirror_maps
 from .maps import MirrorMap
@@ -87,23 +88,21 @@ def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, co
     twin = np.einsum("kj,kji->ki", weights, geometry.points[corners])
     pairable = max(len(sources), 1)
     confident = confidence[listed] >= CONFIDENT
-    summary = {"map": mirror.name, "coverage": float(np.count_nonzero(listed) / pairable),
-               "consistency": float(np.count_nonzero(listed) / max(landed, 1)),
-               "confident_share": float(np.count_nonzero(confident) / pairable),
-               "confidence_threshold": CONFIDENT,
-               "median_errors_in_spacings": dict(zip(("round_trip", "landing", "neighbours"),
-                                                     np.median(errors[listed], axis=0).tolist()
-                                                     if listed.any() else [None] * 3))}
+    summary = MirrorMapReport(mirror.name, float(np.count_nonzero(listed) / pairable),
+                              float(np.count_nonzero(listed) / max(landed, 1)),
+                              float(np.count_nonzero(confident) / pairable), CONFIDENT,
+                              dict(zip(("round_trip", "landing", "neighbours"),
+                                       np.median(errors[listed], axis=0).tolist() if listed.any() else [None] * 3)))
     return MirrorPairs(vertex, twin, corners, weights, confidence[rows], len(geometry.points), summary)
 
 
-def doubtful_map_warning(report: dict) -> str | None:
+def doubtful_map_warning(report: MirrorMapReport) -> str | None:
     """The warning a result deserves when too little of its map is confident (``report``: a
     :class:`MirrorPairs` report), or None."""
-    share = report["confident_share"]
+    share = report.confident_share
     if share >= DOUBTFUL_SHARE:
         return None
-    return (f"only {share:.0%} of the surface has a confident mirror twin (map: {report['map']}); the automatic pairs "
+    return (f"only {share:.0%} of the surface has a confident mirror twin (map: {report.map}); the automatic pairs "
             "may mirror the wrong parts. Write them with `symblend pairs MESH -o pairs.pp` (find_mirror_pairs in "
             "Python), check and correct them in MeshLab's PickPoints, then symmetrize with -l pairs.pp; or place "
             "landmark pairs where the per-vertex symblend_pair_confidence is low.")

@@ -35,6 +35,7 @@ from .config import AutoConfig
 from .connectivity import ring_consistent, tessellation_mirror
 from .growth import grow_and_prune
 from .maps import MirrorMap
+from .report import PairSearch
 from .surface import Surface
 from .twins import find_twins
 
@@ -43,14 +44,14 @@ from .twins import find_twins
 class AutomaticPairs:
     """Pairs found in one round, each side a point of the surface: barycentric ``left_weights`` (n, 3) on the
     vertices ``left_corners`` (n, 3), likewise ``right_weights`` and ``right_corners`` (weight 1 on one corner:
-    that vertex); midline vertices ``midline`` (m,); ``info``, what the round reports."""
+    that vertex); midline vertices ``midline`` (m,); ``search``, what the round reports of the search."""
 
     left_corners: np.ndarray
     left_weights: np.ndarray
     right_corners: np.ndarray
     right_weights: np.ndarray
     midline: np.ndarray
-    info: dict
+    search: PairSearch
 
 
 @dataclasses.dataclass(frozen=True)
@@ -92,20 +93,21 @@ def find_pairs(mirror: MirrorMap, sources: np.ndarray, count: int, constraints: 
     # intrinsic map), and the growth, the prune and the vertex share verify every seed.
     seeds = twins.exact_vertex(config) & covered & ~forbidden[twins.vertex]
     beyond_chance = seeds & (surface.chance_ratio(twins.ratio) <= config.ratio)
-    info = {"map": mirror.name, "twins": float(np.mean(covered)),
-            "consistency": float(np.count_nonzero(covered) / max(np.count_nonzero(landed), 1)),
-            "vertex_twins": float(np.count_nonzero(beyond_chance) / np.count_nonzero(covered))}
+    search = PairSearch(mirror.name, float(np.mean(covered)),
+                        float(np.count_nonzero(covered) / max(np.count_nonzero(landed), 1)),
+                        float(np.count_nonzero(beyond_chance) / np.count_nonzero(covered)))
     if exact is not False and (exact or np.count_nonzero(seeds) > config.local_neighbours):
         # Vertex twins, perhaps: the growth from them proves it by pairing most of the vertices, which it
         # cannot do on two sides sampled independently (their vertices miss each other's local maps).
-        found = _exact_pairs(mirror, sources, twins, seeds, count, constraints, info)
-        if exact or found.info["vertex_share"] >= config.vertex_share:
+        found = _exact_pairs(mirror, sources, twins, seeds, count, constraints, search)
+        if exact or found.search.vertex_share >= config.vertex_share:
             return found
     usable = covered & ~forbidden[sources]
     candidates = sources[usable]
     chosen = spread(surface.points, candidates, count)
     pairs = _point_pairs(surface, sources, twins, np.searchsorted(sources, chosen))
-    return AutomaticPairs(*pairs, {**info, "twins_are": "points of the surface", "candidates": len(candidates)})
+    return AutomaticPairs(*pairs, dataclasses.replace(search, twins_are="points of the surface",
+                                                       candidates=len(candidates)))
 
 
 def _point_pairs(surface: Surface, sources: np.ndarray, twins, rows: np.ndarray):
@@ -123,12 +125,11 @@ def _point_pairs(surface: Surface, sources: np.ndarray, twins, rows: np.ndarray)
 
 
 def _exact_pairs(mirror: MirrorMap, sources: np.ndarray, twins, exact_twins: np.ndarray, count: int,
-                 constraints: Constraints, info: dict) -> AutomaticPairs:
-    """Exact vertex pairs grown from the exact twins (see the module doc); ``info`` gains what the growth
+                 constraints: Constraints, search: PairSearch) -> AutomaticPairs:
+    """Exact vertex pairs grown from the exact twins (see the module doc); ``search`` gains what the growth
     did and ``vertex_share``, the share of the usable vertices it paired. Where the growth does not reach
     (the tip of a horn) nothing is paired: the map's twin points there would carry its tangential error
     into the solve (on a bent cow, 3x the symmetry error of leaving them to the warp)."""
-    info = dict(info)
     surface, geometry, config = mirror.surface, constraints.geometry, constraints.config
     fixed, forbidden = constraints.fixed, constraints.forbidden
     n = len(surface.points)
@@ -139,11 +140,12 @@ def _exact_pairs(mirror: MirrorMap, sources: np.ndarray, twins, exact_twins: np.
     partner[seeds], partner[twin] = twin, seeds
     in_sample = np.zeros(n, dtype=bool)
     in_sample[sources] = True
-    info.update(grow_and_prune(surface, geometry, partner, in_sample & ~forbidden, surface.usable & ~forbidden,
-                               forbidden, config))
+    growth = grow_and_prune(surface, geometry, partner, in_sample & ~forbidden, surface.usable & ~forbidden,
+                            forbidden, config)
+    tessellation = None
     if surface.is_mesh:
         mirrored = tessellation_mirror(surface.adjacency, partner, surface.usable & ~forbidden, config)
-        info["tessellation_mirror"] = mirrored is not None
+        tessellation = mirrored is not None
         if mirrored is not None:
             # Where the tessellation stops mirroring (a midline strip triangulated one way), its pairs can be
             # wrong: those are left to the geometric growth from the pairs whose rings map whole, which are
@@ -151,11 +153,11 @@ def _exact_pairs(mirror: MirrorMap, sources: np.ndarray, twins, exact_twins: np.
             whole = ring_consistent(surface.adjacency, mirrored) & ~forbidden
             partner[:] = np.where(whole, mirrored, -1)
             _hold_landmarks(partner, fixed)
-            info.update(grow_and_prune(surface, geometry, partner, in_sample & ~forbidden,
-                                       surface.usable & ~forbidden, forbidden | whole, config))
+            growth = grow_and_prune(surface, geometry, partner, in_sample & ~forbidden,
+                                    surface.usable & ~forbidden, forbidden | whole, config)
     automatic = (partner >= 0) & ~forbidden
-    info["vertex_share"] = float(np.count_nonzero(automatic & surface.usable) /
-                                 max(np.count_nonzero(surface.usable & ~forbidden), 1))
+    vertex_share = float(np.count_nonzero(automatic & surface.usable) /
+                         max(np.count_nonzero(surface.usable & ~forbidden), 1))
     gap = surface.points - surface.points[np.maximum(partner, 0)]
     left = np.flatnonzero(automatic & (partner != index) & (gap @ mirror.normal > 0))
     midline = np.flatnonzero(automatic & (partner == index))
@@ -163,7 +165,10 @@ def _exact_pairs(mirror: MirrorMap, sources: np.ndarray, twins, exact_twins: np.
     chosen = spread(surface.points, candidates, count)
     on_plane = partner[chosen] == chosen
     return AutomaticPairs(*vertex_points(chosen[~on_plane]), *vertex_points(partner[chosen[~on_plane]]),
-                          chosen[on_plane], {**info, "twins_are": "exact vertices", "candidates": len(candidates)})
+                          chosen[on_plane], dataclasses.replace(search, twins_are="exact vertices",
+                                                                candidates=len(candidates), **growth,
+                                                                tessellation_mirror=tessellation,
+                                                                vertex_share=vertex_share))
 
 
 def _hold_landmarks(partner: np.ndarray, fixed: LandmarkPairs | None) -> None:

@@ -23,7 +23,7 @@ import warnings
 import numpy as np
 from scipy.sparse.csgraph import connected_components
 
-from ..core.geometry import reflection_across_plane
+from ..core.geometry import MirrorPlane, reflection_across_plane
 from ..core.landmark_asymmetry import fit_mirror_plane
 from ..core.landmark_pairs import LandmarkPairs, check_landmarks
 from ..core.neighbourhoods import connecting_width, mean_nearest_spacing, pair_weights
@@ -37,6 +37,7 @@ from .first_map import coverage, first_map
 from .intrinsic_start import cannot_start, intrinsic_start
 from .maps import MirrorMap, field_map, plane_map
 from .pairs import Constraints, as_landmarks, find_pairs, spread
+from .report import AutomaticPairsReport, Round
 from .surface import Outline, Surface, build_surface
 
 
@@ -56,7 +57,7 @@ def _connected_options(points: np.ndarray, landmarks: LandmarkPairs, options: di
 def _output_map(surface: Surface, result: SymmetrizationResult, sample: np.ndarray, config: AutoConfig) -> MirrorMap:
     """The map of a symmetrized output: its plane, or on a mesh a field registered on it from its plane."""
     output = surface.moved(result.points)
-    normal, offset = np.asarray(result.report["plane_normal"]), result.report["plane_offset"]
+    normal, offset = result.report.plane
     plane = plane_map(output, normal, offset, name="output plane")
     if isinstance(surface, Outline) or coverage(plane, sample, config) >= config.plane_suffices:
         return plane
@@ -75,7 +76,7 @@ def plane_asymmetry(surface: Surface, normal: np.ndarray, offset: float, sample:
 
 def surface_asymmetry(surface: Surface, result: SymmetrizationResult, sample: np.ndarray) -> float:
     """RMS distance of the ``sample`` vertices of the output to its reflection across its plane, / diagonal."""
-    return plane_asymmetry(surface.moved(result.points), result.report["plane_normal"], result.report["plane_offset"],
+    return plane_asymmetry(surface.moved(result.points), result.report.plane.normal, result.report.plane.offset,
                            sample)
 
 
@@ -137,30 +138,30 @@ def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: d
     sample = spread(points, surface.usable_index, max(config.samples, 2 * options["auto_pair_count"]))
     scored = spread(points, surface.usable_index, config.score_samples)
     registration = spread(points, surface.usable_index, config.registration_samples)
-    report = {"excluded_vertices": int(0 if excluded is None else len(excluded))}
+    start = {}  # how the rounds started: the first map's coverage and plane, or the intrinsic start
+    history, messages = [], []
     if landmarks is None:
         try:
-            mirror, coverage, plane = first_map(surface, scored, config, scaled_progress(progress, 0.0, 30.0))
-            report.update(coverage=coverage, surface_plane={"normal": plane[0].tolist(), "offset": plane[1]})
+            mirror, shares, plane = first_map(surface, scored, config, scaled_progress(progress, 0.0, 30.0))
+            start = {"coverage": shares, "surface_plane": MirrorPlane(np.asarray(plane[0], dtype=float), float(plane[1]))}
             result, best = None, np.inf
         except SymmetryNotFoundError as refusal:  # a strongly posed body, or a shape with no mirror symmetry
             if core["mode"] != "articulated":  # the intrinsic mirror holds under isometries: a pose, not a compression
                 raise _refusal_saying(refusal, "If it is a posed body, mode='articulated' pairs it by its intrinsic "
                                                "mirror.") from None
             result, tried = _intrinsic_first_output(points, surface, core, scored, config, refusal, progress)
-            report["intrinsic_start"] = tried
-            best = tried["starts"][tried["chosen"]]["surface_asymmetry"]  # measured there, as below
-            report["rounds"] = [{"intrinsic_start": True, "surface_asymmetry": best}]
-            report["warnings"] = [INTRINSIC_START_WARNING]
+            start = {"intrinsic_start": tried}
+            best = surface_asymmetry(surface, result, scored)
+            history.append(Round(best, start="intrinsic"))
+            messages.append(INTRINSIC_START_WARNING)
             mirror = _output_map(surface, result, registration, config)
     else:
         result = solve(points, landmarks, core, scaled_progress(progress, 0.0, 20.0))
         best = surface_asymmetry(surface, result, scored)
-        report["rounds"] = [{"landmarks_only": True, "surface_asymmetry": best}]
+        history.append(Round(best, start="landmarks"))
         if progress is not None:
             progress(20.0, "registering a mirror field on the landmarks' output")
         mirror = _output_map(surface, result, registration, config)
-    history = report.setdefault("rounds", [])
     count = options["auto_pair_count"]
     round_count = min(count, config.round_pairs)
     exact_twins = None  # decided by the first round
@@ -169,7 +170,7 @@ def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: d
     def attempt(mirror: MirrorMap, pairs_wanted: int, start: float):
         nonlocal exact_twins
         pairs = find_pairs(mirror, sample, pairs_wanted, constraints, exact_twins)
-        exact_twins = pairs.info["twins_are"] == "exact vertices"
+        exact_twins = pairs.search.twins_are == "exact vertices"
         solved, checked = as_landmarks(points, pairs, landmarks, options["landmark_priority"], config.coincident)
         solve_options = _connected_options(solved, checked, core)
         for widening in range(config.widenings + 1):
@@ -181,82 +182,77 @@ def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: d
                     raise
                 solve_options = {**solve_options, "theta_width": 2.0 * solve_options["theta_width"]}
         candidate = dataclasses.replace(candidate, points=candidate.points[:n], asymmetry=candidate.asymmetry[:n])
-        entry = {**pairs.info, "pairs": int(len(checked.left) - (0 if landmarks is None else len(landmarks.left))),
-                 "midline": int(len(checked.midline) - (0 if landmarks is None else len(landmarks.midline))),
-                 "surface_asymmetry": surface_asymmetry(surface, candidate, scored)}
-        for width in ("phi_width", "theta_width"):
-            if solve_options[width] != core[width]:
-                entry[width] = solve_options[width]
+        entry = Round(surface_asymmetry(surface, candidate, scored), search=pairs.search,
+                      pairs=int(len(checked.left) - (0 if landmarks is None else len(landmarks.left))),
+                      midline=int(len(checked.midline) - (0 if landmarks is None else len(landmarks.midline))),
+                      raised_widths={width: solve_options[width] for width in ("phi_width", "theta_width")
+                                     if solve_options[width] != core[width]})
         return candidate, entry
 
     stopped, source = "round limit", mirror
     for index in range(rounds_allowed):
-        start = 30.0 + index * step
+        begin = 30.0 + index * step
         if progress is not None:
-            progress(start, f"automatic pairs, round {index + 1}")
-        candidate, entry = attempt(mirror, round_count, start)
+            progress(begin, f"automatic pairs, round {index + 1}")
+        candidate, entry = attempt(mirror, round_count, begin)
         previous = points if result is None else result.points  # round 1 of 'auto': against the input itself
-        entry["change"] = float(np.abs(candidate.points - previous).max() / surface.diagonal)
-        history.append(entry)
-        if entry["surface_asymmetry"] > best * (1.0 + 1e-9):
-            entry["kept"] = False
+        entry = dataclasses.replace(entry, change=float(np.abs(candidate.points - previous).max() / surface.diagonal))
+        if entry.surface_asymmetry > best * (1.0 + 1e-9):
+            history.append(dataclasses.replace(entry, kept=False))
             stopped = "no gain"
             break
-        gain = 1.0 - entry["surface_asymmetry"] / best if np.isfinite(best) and best > 0 else 1.0
-        result, best, source = candidate, entry["surface_asymmetry"], mirror
-        if entry["change"] < config.converged_change:
+        history.append(entry)
+        gain = 1.0 - entry.surface_asymmetry / best if np.isfinite(best) and best > 0 else 1.0
+        result, best, source = candidate, entry.surface_asymmetry, mirror
+        if entry.change < config.converged_change:
             stopped = "converged"
             break
-        if entry.get("vertex_share", entry["twins"]) >= config.plane_suffices:  # exact pairs: the share paired
+        if entry.search.share_paired >= config.plane_suffices:  # exact pairs: the share paired
             stopped = "paired"
             break
         if gain < config.least_gain:
             stopped = "little gain"
             break
         mirror = _output_map(surface, result, registration, config)
-    if count > round_count and history[-1]["candidates"] > round_count:
+    if count > round_count and history[-1].search.candidates > round_count:
         # The rounds found the twins with fewer pairs; the output is solved with all of them.
         if progress is not None:
             progress(30.0 + rounds_allowed * step, f"automatic pairs: the solve with {count} pairs")
         result, entry = attempt(source, count, 30.0 + rounds_allowed * step)
-        entry["final"] = True
-        history.append(entry)
+        history.append(dataclasses.replace(entry, final=True))
     if progress is not None:
         progress(98.0, "every vertex's twin, with its confidence")
     twins = mirror_pairs(source, surface, forbidden, config)
     doubtful = doubtful_map_warning(twins.report)
     if doubtful is not None:
-        report.setdefault("warnings", []).append(doubtful)
-    for message in report.get("warnings", []):
+        messages.append(doubtful)
+    for message in messages:
         warnings.warn(message, SymblendWarning, stacklevel=3)
     if progress is not None:
         progress(100.0, "done")
-    report["stopped"] = stopped
+    kept = [entry for entry in history if entry.kept and not entry.is_start]
+    report = AutomaticPairsReport(
+        pair_count=result.report.pair_count - (0 if landmarks is None else len(landmarks.left)),
+        midline_count=result.report.midline_count - (0 if landmarks is None else len(landmarks.midline)),
+        rounds=tuple(history), stopped=stopped, twins_are=kept[-1].search.twins_are if kept else None,
+        consistency=kept[-1].search.consistency if kept else None, mirror_map=twins.report,
+        excluded_vertices=int(0 if excluded is None else len(excluded)), warnings=tuple(messages), **start)
     return _final(points, surface.representative, result, landmarks, report, clock, twins)
 
 
 def _final(points, representative, result, landmarks, report, clock, twins) -> SymmetrizationResult:
     """The result cut back to the input's vertices (each duplicate where its first copy went), with the
-    automatic pairs' ``report`` (why the rounds stopped already in it)."""
+    automatic pairs' ``report``: the pair counts are the user's, the landmark asymmetry theirs alone."""
     final = result.report
-    user_pairs = 0 if landmarks is None else len(landmarks.left)
-    user_midline = 0 if landmarks is None else len(landmarks.midline)
-    kept = [entry for entry in report["rounds"]
-            if entry.get("kept", True) and not entry.get("landmarks_only") and not entry.get("intrinsic_start")]
-    report.update(pair_count=int(final["pair_count"] - user_pairs),
-                  midline_count=int(final["midline_count"] - user_midline),
-                  twins_are=kept[-1]["twins_are"] if kept else None,
-                  consistency=kept[-1]["consistency"] if kept else None, mirror_map=twins.report)
-    out = {**final, "pair_count": user_pairs, "midline_count": user_midline, "auto_pairs": report}
     if landmarks is None:
-        out.pop("landmark_asymmetry_before")
-        out.pop("landmark_asymmetry_after")
+        before = after = None
     else:
-        diagonal = final["diagonal"]
-        out["landmark_asymmetry_before"] = fit_mirror_plane(points[landmarks.left], points[landmarks.right]).summary(diagonal)
-        out["landmark_asymmetry_after"] = fit_mirror_plane(result.points[landmarks.left],
-                                                           result.points[landmarks.right]).summary(diagonal)
-    out["seconds"] = {**final["seconds"], "total": time.perf_counter() - clock}
+        before = fit_mirror_plane(points[landmarks.left], points[landmarks.right]).summary(final.diagonal)
+        after = fit_mirror_plane(result.points[landmarks.left], result.points[landmarks.right]).summary(final.diagonal)
+    out = final.replace(pair_count=0 if landmarks is None else len(landmarks.left),
+                        midline_count=0 if landmarks is None else len(landmarks.midline), auto_pairs=report,
+                        landmark_asymmetry_before=before, landmark_asymmetry_after=after,
+                        seconds=dataclasses.replace(final.seconds, total=time.perf_counter() - clock))
     points_out = result.points[representative]
     if not np.isfinite(points_out).all():
         raise GeometryError("The automatic pairs gave a non-finite output (a singular system went undetected); "

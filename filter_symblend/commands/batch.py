@@ -95,7 +95,7 @@ def run_row(row: Row) -> dict:
     try:
         with threadpool_limits(1), warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            report, ms = symmetrize_files(symmetrize_arguments(list(row.arguments)))
+            done = symmetrize_files(symmetrize_arguments(list(row.arguments)))
     except Exception as error:  # noqa: BLE001  one specimen's failure, of any kind, must not stop the study
         if isinstance(error, SymblendError):
             message = one_line(error)
@@ -106,31 +106,32 @@ def run_row(row: Row) -> dict:
         return {**summary, "output": "", "status": "failed", "seconds": round(time.perf_counter() - start, 2),
                 "error": message}  # no output: a failed row writes nothing
     return {**summary, "status": "ok", "seconds": round(time.perf_counter() - start, 2),
-            **_from_report(report, ms.current_mesh().vertex_matrix())}
+            **_from_saved(done.document(), done.ms.current_mesh().vertex_matrix())}
 
 
-def _from_report(report: dict, points) -> dict:
-    """What a specimen's summary takes from its report and output points (N, 3): the asymmetry columns
+def _from_saved(saved: dict, points) -> dict:
+    """What a specimen's summary takes from its JSON report (the file's form, so that a row done now and one
+    done by an earlier run read alike) and output points (N, 3): the asymmetry columns
     (RMS, relative to the diagonal), with automatic pairs the confident share of their map, with
     ``uncertainty`` its 90th percentile and the most influential pair's landmark names, and its
     landmarks after symmetrizing ([[name, x, y, z], ...])."""
-    figures = {key: f"{report[key]['rms_relative']:.6g}" for key in ASYMMETRY_FIELDS if key in report}
-    if "auto_pairs" in report:  # the share of the surface whose automatic twin is confident
-        figures["confident_share"] = f"{report['auto_pairs']['mirror_map']['confident_share']:.3g}"
-    if "uncertainty" in report:  # the jackknife's 90th percentile (relative) and the pair that moves it most
-        figures["uncertainty_p90"] = f"{report['uncertainty']['p90_relative']:.6g}"
-        figures["most_influential_pair"] = landmark_name(report["uncertainty"]["most_influential_pair"],
-                                                         report.get("landmarks"))
-    placed = (report.get("landmarks") or {}).get("vertices", [])
+    figures = {key: f"{saved[key]['rms_relative']:.6g}" for key in ASYMMETRY_FIELDS if key in saved}
+    if "auto_pairs" in saved:  # the share of the surface whose automatic twin is confident
+        figures["confident_share"] = f"{saved['auto_pairs']['mirror_map']['confident_share']:.3g}"
+    if "uncertainty" in saved:  # the jackknife's 90th percentile (relative) and the pair that moves it most
+        figures["uncertainty_p90"] = f"{saved['uncertainty']['p90_relative']:.6g}"
+        figures["most_influential_pair"] = landmark_name(saved["uncertainty"]["most_influential_pair"],
+                                                         saved.get("landmarks"))
+    placed = (saved.get("landmarks") or {}).get("vertices", [])
     return {**figures, "landmarks": [[name, *map(float, points[vertex])] for name, vertex in placed]}
 
 
 def _done_before(row: Row) -> dict:
     """The summary of a row done by an earlier run, from its report."""
-    report = json.loads(row.report.read_text())
+    saved = json.loads(row.report.read_text())
     ms = load_mesh(row.output)  # any file name (pymeshlab takes UTF-8 text only)
     return {"mesh": str(row.mesh), "output": str(row.output), "status": "done before", "seconds": 0.0,
-            **_from_report(report, ms.current_mesh().vertex_matrix())}
+            **_from_saved(saved, ms.current_mesh().vertex_matrix())}
 
 
 class _Stopped(BaseException):

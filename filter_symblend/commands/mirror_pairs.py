@@ -77,8 +77,8 @@ def run(args) -> int:
     write_landmarks(args.output, LandmarkSet(kept + automatic))
     report = pairs.report
     print(f"{args.output}: {len(rows)} automatic pairs (of {int(pairs.confident().sum())} confident twins; map: "
-          f"{report['map']}; {report['confident_share']:.0%} of the surface has a confident twin, "
-          f"{report['coverage']:.0%} a twin){' and your ' + str(len(kept)) + ' landmarks' if kept else ''}")
+          f"{report.map}; {report.confident_share:.0%} of the surface has a confident twin, "
+          f"{report.coverage:.0%} a twin){' and your ' + str(len(kept)) + ' landmarks' if kept else ''}")
     if len(rows) < args.count:
         print(f"symblend: warning: only {len(rows)} confident pairs lie apart from the midline; place landmarks "
               "where the map is not sure (symblend symmetrize --pairs auto writes the per-vertex confidence "

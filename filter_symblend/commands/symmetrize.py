@@ -3,10 +3,14 @@ or from automatic pairs, through the MeshSet filter; the output mesh and the JSO
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 
+import pymeshlab
+
+from ..core.report import UncertaintySummary
 from ..errors import SymblendError
-from ..meshlab.meshset_filter import generate_symmetrized_mesh
+from ..meshlab.meshset_filter import FilterRun, run_filter
 from ..parameters import PARAMETERS
 from .console import progress_display
 from .landmark_input import write_landmarks
@@ -24,9 +28,24 @@ def register(commands) -> None:
     parser.set_defaults(handler=run)
 
 
-def symmetrize_files(args, progress=None):
+@dataclasses.dataclass(frozen=True)
+class Symmetrized:
+    """One mesh symmetrized by the command: the filter's ``run`` (its typed report), the landmark file's
+    ``landmarks`` as read (commands/landmark_input; None with automatic pairs alone) and the MeshSet ``ms``
+    holding the output as its current mesh."""
+
+    run: FilterRun
+    landmarks: dict | None
+    ms: pymeshlab.MeshSet
+
+    def document(self) -> dict:
+        """The JSON report written by ``--report``: the filter's, with the landmark names under ``landmarks``."""
+        return {**self.run.to_dict(), "landmarks": self.landmarks}
+
+
+def symmetrize_files(args, progress=None) -> Symmetrized:
     """``symblend symmetrize`` without its printout, for one parsed command line ``args``: every check,
-    then the filter, the output mesh and the report written. Returns (report, the MeshSet)."""
+    then the filter, the output mesh and the report written."""
     params = {p.name: getattr(args, p.name) for p in PARAMETERS}
     automatic = params["pairs"] == "auto"
     if automatic and (args.landmarks or args.missing):
@@ -44,38 +63,37 @@ def symmetrize_files(args, progress=None):
     landmarks = None if automatic else write_landmarks(ms, args, params)
     if landmarks and landmarks["curves"] and not params["width_spacing"]:
         params["width_spacing"] = landmarks["placed_point_spacing"]  # semilandmarks leave the widths as they were
-    report = generate_symmetrized_mesh(ms, progress, **params)
-    report["landmarks"] = landmarks
-    save_with_report(ms, args.output, args.report, report)
-    return report, ms
+    done = Symmetrized(run_filter(ms, params, progress), landmarks, ms)
+    save_with_report(ms, args.output, args.report, done.document())
+    return done
 
 
 def run(args) -> int:
     """The command: :func:`symmetrize_files`, then one line of figures on stdout and the warnings on stderr."""
-    report, _ = symmetrize_files(args, progress_display())
-    pairs = f"{report['pair_count']} landmark pairs"
-    if "auto_pairs" in report:
-        automatic_pairs = report["auto_pairs"]
-        pairs += (f" + {automatic_pairs['pair_count']} automatic pairs ({len(automatic_pairs['rounds'])} rounds, "
-                  f"stopped: {automatic_pairs['stopped']}; confident twins on "
-                  f"{automatic_pairs['mirror_map']['confident_share']:.0%} of the surface)")
+    done = symmetrize_files(args, progress_display())
+    report = done.run.report
+    pairs = f"{report.pair_count} landmark pairs"
+    if report.auto_pairs is not None:
+        automatic = report.auto_pairs
+        pairs += (f" + {automatic.pair_count} automatic pairs ({len(automatic.rounds)} rounds, "
+                  f"stopped: {automatic.stopped}; confident twins on "
+                  f"{automatic.mirror_map.confident_share:.0%} of the surface)")
     landmark_line = ""
-    if "landmark_asymmetry_before" in report:
-        before, after = report["landmark_asymmetry_before"], report["landmark_asymmetry_after"]
-        landmark_line = (f"landmark asymmetry RMS {before['rms_relative']:.2%} -> {after['rms_relative']:.1e} "
-                         "of the diagonal; ")
+    if report.landmark_asymmetry_before is not None:
+        landmark_line = (f"landmark asymmetry RMS {report.landmark_asymmetry_before.rms_relative:.2%} -> "
+                         f"{report.landmark_asymmetry_after.rms_relative:.1e} of the diagonal; ")
     checks = ""
-    if "mirror_asymmetry_before" in report:
-        before, after = report["mirror_asymmetry_before"], report["mirror_asymmetry_after"]
+    if report.checks is not None:
+        before, after = report.checks.before, report.checks.after
         checks = ("mirror asymmetry of the diagonal, before -> after: " + ", ".join(
             f"{label} {before[key + '_relative']:.3%} -> {after[key + '_relative']:.3%}"
             for label, key in (("median", "p50"), ("p90", "p90"), ("RMS", "rms"))))
-    if "hausdorff_input_output" in report:
-        checks += f"; two-way Hausdorff input<->output {report['hausdorff_input_output']['max']:.4g}"
-    print(f"{args.output}: {pairs}, mode {report['mode']}; {landmark_line}{checks}".rstrip("; "))
-    if "uncertainty" in report:
-        print(uncertainty_line(report["uncertainty"], report.get("landmarks")))
-    for message in report.get("warnings", []):
+        if report.checks.hausdorff is not None:
+            checks += f"; two-way Hausdorff input<->output {report.checks.hausdorff['max']:.4g}"
+    print(f"{args.output}: {pairs}, mode {report.mode}; {landmark_line}{checks}".rstrip("; "))
+    if report.uncertainty is not None:
+        print(uncertainty_line(report.uncertainty, done.landmarks))
+    for message in report.checks.warnings if report.checks is not None else ():
         print(f"warning: {message}", file=sys.stderr)
     return 0
 
@@ -89,10 +107,10 @@ def landmark_name(unit: str, landmarks: dict | None) -> str:
     return landmarks["midline"][int(unit.split()[-1]) - 1]
 
 
-def uncertainty_line(uncertainty: dict, landmarks: dict | None) -> str:
+def uncertainty_line(uncertainty: UncertaintySummary, landmarks: dict | None) -> str:
     """One line of the report's ``uncertainty``, the most influential pair by its landmark names."""
-    top = uncertainty["most_influential_pair"]
-    return (f"uncertainty (jackknife, {uncertainty['left_out']} landmarks left out in turn): median "
-            f"{uncertainty['median_relative']:.3%}, p90 {uncertainty['p90_relative']:.3%}, max "
-            f"{uncertainty['max_relative']:.3%} of the diagonal; most influential: {landmark_name(top, landmarks)} "
-            f"(the result moves up to {uncertainty['influence_relative'][top]:.3%} without it)")
+    top = uncertainty.most_influential_pair
+    return (f"uncertainty (jackknife, {uncertainty.left_out} landmarks left out in turn): median "
+            f"{uncertainty.median_relative:.3%}, p90 {uncertainty.p90_relative:.3%}, max "
+            f"{uncertainty.max_relative:.3%} of the diagonal; most influential: {landmark_name(top, landmarks)} "
+            f"(the result moves up to {uncertainty.influence_relative[top]:.3%} without it)")

@@ -15,6 +15,7 @@ import dataclasses
 import numpy as np
 
 from .geometry import MIRROR_X, reflection_across_plane, rigid_fit
+from .report import LandmarkAsymmetry
 
 
 @dataclasses.dataclass(frozen=True)
@@ -33,12 +34,10 @@ class MirrorFit:
         """Mirror images of ``points`` (m, 3) across the plane."""
         return reflection_across_plane(points, self.normal, self.offset)
 
-    def summary(self, diagonal: float) -> dict[str, float]:
-        """RMS and max of the deviations, absolute and relative to ``diagonal``."""
-        rms = float(np.sqrt(np.mean(self.deviations**2)))
-        worst = float(self.deviations.max())
-        return {"rms": rms, "max": worst, "rms_relative": rms / diagonal,
-                "max_relative": worst / diagonal}
+    def summary(self, diagonal: float) -> LandmarkAsymmetry:
+        """RMS and max of the deviations, relative to ``diagonal`` too."""
+        return LandmarkAsymmetry(float(np.sqrt(np.mean(self.deviations**2))), float(self.deviations.max()),
+                                 float(diagonal))
 
 
 def fit_mirror_plane(left: np.ndarray, right: np.ndarray) -> MirrorFit:

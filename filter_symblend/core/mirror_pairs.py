@@ -8,12 +8,12 @@ output), so the twins can be placed on either (:meth:`MirrorPairs.twins_on`).
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
 
 import numpy as np
 
 from .geometry import bounding_diagonal
 from .mesh_quantities import farthest_point_order
+from .report import MirrorMapReport
 
 CONFIDENT = 0.5  # a twin at or above this confidence counts as confident (see auto/confidence)
 APART = 0.02  # x diagonal: a landmark pair closer than this says little about the mirror and snaps ambiguously
@@ -35,7 +35,7 @@ class MirrorPairs:
     weights: np.ndarray
     confidence: np.ndarray
     n_vertices: int
-    report: dict[str, Any]
+    report: MirrorMapReport
 
     def twins_on(self, points: np.ndarray) -> np.ndarray:
         """(k, 3): the twins on another embedding ``points`` (N, 3) of the same mesh."""

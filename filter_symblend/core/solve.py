@@ -6,19 +6,19 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import Any
 import warnings
 
 import numpy as np
 
 from ..errors import GeometryError, SymblendWarning, id_list
-from .geometry import bounding_diagonal, flat_normal, minimal_rotation, normalize, rigid_fit
+from .geometry import MirrorPlane, bounding_diagonal, flat_normal, minimal_rotation, normalize, rigid_fit
 from .global_solve import MINUS_X, global_solve
 from .landmark_asymmetry import fit_mirror_plane
 from .landmark_pairs import LandmarkPairs, midline_labels
 from .local_symmetries import LocalSymmetries, local_symmetries
 from .mirror_pairs import MirrorPairs
 from .neighbourhoods import mean_nearest_spacing, pair_weights, require_connected, scaled_weights
+from .report import LocalFit, Report, Spread, Timings, Widths
 from .splines import thin_plate_spline
 
 # A pair's own mirror misfit, in neighbourhood radii, above which it is reported.
@@ -35,7 +35,8 @@ class SymmetrizationResult:
 
     points (N, 3): the warped vertices, in the frame chosen by ``output_frame``.
     asymmetry (N,): distance each vertex moved, measured in the input frame.
-    report: pair count, plane, landmark asymmetry before/after, widths, seconds.
+    report: what was measured (core/report): pair count, plane, landmark asymmetry before/after,
+    widths, seconds; ``report.to_dict()`` is its JSON form.
     mirror_pairs: with automatic pairs, the mirror map they came from (every vertex's twin, with its
     confidence); None with landmark pairs alone.
     uncertainty (N,): with ``uncertainty='jackknife'``, the jackknife standard error of each restored
@@ -44,7 +45,7 @@ class SymmetrizationResult:
 
     points: np.ndarray
     asymmetry: np.ndarray
-    report: dict[str, Any]
+    report: Report
     mirror_pairs: MirrorPairs | None = None
     uncertainty: np.ndarray | None = None
 
@@ -83,11 +84,6 @@ def _kept_flat(warped: np.ndarray, reference: np.ndarray, normal: np.ndarray) ->
         return out
     return warped - np.outer((warped - reference) @ normal, normal) if reference is not warped else \
         warped - np.outer(warped @ normal - np.mean(warped @ normal), normal)
-
-
-def _summary(values: np.ndarray) -> dict[str, float]:
-    return {"mean": float(values.mean()), "rms": float(np.sqrt(np.mean(values**2))),
-            "max": float(values.max())}
 
 
 def _report_progress(progress, percent: float, message: str) -> None:
@@ -211,39 +207,28 @@ def solve(points: np.ndarray, landmarks: LandmarkPairs, options: dict, progress=
     clock["warp"] = time.perf_counter()
     _report_progress(progress, 100.0, "done")
 
-    report = {
-        "pair_count": int(len(left)),
-        "midline_count": int(len(landmarks.midline)),
-        "mode": options["mode"],
-        "output_frame": options["output_frame"],
-        "plane_normal": normal.tolist(),
-        "plane_offset": offset,
-        # 4x4 rigid map from the input frame to the canonical one (plane x = 0).
-        "canonical_from_input": np.block([[rotation.T, (-rotation.T @ translation)[:, None]],
-                                          [np.zeros((1, 3)), np.ones((1, 1))]]).tolist(),
-        "landmark_asymmetry_before": fit_mirror_plane(points[left], points[right]).summary(diagonal),
-        "landmark_asymmetry_after": fit_mirror_plane(warped[left], warped[right]).summary(diagonal),
-        "vertex_displacement": _summary(asymmetry),
-        "diagonal": diagonal,
-        "mean_landmark_spacing": steps.measured_spacing,
-        "width_spacing": steps.spacing,
-        "phi_width": options["phi_width"],
-        "phi_h": steps.phi_h,
-        "theta_width": options["theta_width"],
-        "theta_h": steps.theta_h,
-        "alpha": options["alpha"],
-        "local_fit_residual": {"median": float(np.median(local.residuals)),
-                               "max": float(local.residuals.max())},
-        "local_stretch": {"min": float(local.stretch.min()), "max": float(local.stretch.max())},
-        "warp": spline.description,
-        "seconds": {},
-    }
-    stages = ["neighbourhoods", "local_transforms", "global_solve", "warp"]
-    previous = clock["start"]
-    for stage in stages:
-        report["seconds"][stage] = clock[stage] - previous
-        previous = clock[stage]
-    report["seconds"]["total"] = previous - clock["start"]
+    stages = ("neighbourhoods", "local_transforms", "global_solve", "warp")
+    ends = [clock["start"]] + [clock[stage] for stage in stages]
+    report = Report(
+        pair_count=int(len(left)),
+        midline_count=int(len(landmarks.midline)),
+        mode=options["mode"],
+        output_frame=options["output_frame"],
+        plane=MirrorPlane(normal, offset),
+        canonical_from_input=np.block([[rotation.T, (-rotation.T @ translation)[:, None]],
+                                       [np.zeros((1, 3)), np.ones((1, 1))]]),
+        landmark_asymmetry_before=fit_mirror_plane(points[left], points[right]).summary(diagonal),
+        landmark_asymmetry_after=fit_mirror_plane(warped[left], warped[right]).summary(diagonal),
+        vertex_displacement=Spread.of(asymmetry),
+        diagonal=diagonal,
+        widths=Widths(steps.measured_spacing, steps.spacing, options["phi_width"], steps.phi_h,
+                      options["theta_width"], steps.theta_h, options["alpha"]),
+        local_fit=LocalFit(float(np.median(local.residuals)), float(local.residuals.max()),
+                           float(local.stretch.min()), float(local.stretch.max())),
+        warp=spline.description,
+        seconds=Timings({stage: end - begin for stage, begin, end in zip(stages, ends, ends[1:])},
+                        ends[-1] - ends[0]),
+    )
     return SymmetrizationResult(warped, asymmetry, report)
 
 

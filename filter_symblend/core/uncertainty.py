@@ -25,6 +25,7 @@ import numpy as np
 from ..errors import GeometryError, SymblendError
 from .geometry import rigid_fit
 from .landmark_pairs import LandmarkPairs, midline_labels
+from .report import UncertaintySummary
 from .solve import LandmarkTargets, landmark_targets
 from .splines import thin_plate_spline
 
@@ -42,15 +43,14 @@ class Uncertainty:
     units: list[str]
     kept_in: dict[str, str]
 
-    def summary(self, diagonal: float) -> dict:
-        """The report's entry: the spread's median, 90th percentile and max, and each unit's influence,
+    def summary(self, diagonal: float) -> UncertaintySummary:
+        """The report's part: the spread's median, 90th percentile and max, and each unit's influence,
         relative to ``diagonal``, and the most influential unit."""
         p50, p90 = np.percentile(self.per_vertex, [50, 90])
-        return {"method": "jackknife", "left_out": len(self.units), "median_relative": float(p50 / diagonal),
-                "p90_relative": float(p90 / diagonal), "max_relative": float(self.per_vertex.max() / diagonal),
-                "influence_relative": {unit: float(value / diagonal) for unit, value in zip(self.units, self.influence)},
-                "most_influential_pair": self.units[int(np.argmax(self.influence))],
-                "kept_in": self.kept_in}
+        return UncertaintySummary(len(self.units), float(p50 / diagonal), float(p90 / diagonal),
+                                  float(self.per_vertex.max() / diagonal),
+                                  {unit: float(value / diagonal) for unit, value in zip(self.units, self.influence)},
+                                  self.units[int(np.argmax(self.influence))], dict(self.kept_in))
 
 
 def _without(landmarks: LandmarkPairs, pair: int | None, midline: int | None) -> LandmarkPairs:

@@ -27,13 +27,14 @@ SPARSE_PAIRS = 10  # landmark pairs below which dense automatic pairs are the fi
 LEFT_ASYMMETRIC = 3.5e-3
 
 
-def nothing_to_restore(before: dict, after: dict, landmarks: dict | None = None) -> bool:
+def nothing_to_restore(before: dict, after: dict, landmark_max: float | None = None) -> bool:
     """Whether an input with mirror asymmetry ``before`` needs nothing: symmetric to the precision of its
     coordinates, or within a scan's noise and no more symmetric after (``after``: the output's, 90th
-    percentile not below the input's by more than WORSE_MARGIN). With the landmark pairs' own asymmetry
-    (``landmarks``: ``max_relative``), they must be symmetric within a scan's noise too: pairs that say
-    otherwise define another symmetry than the surface's best plane (a shape may have several)."""
-    if landmarks is not None and landmarks["max_relative"] >= SCAN_NOISE:
+    percentile not below the input's by more than WORSE_MARGIN). With the landmark pairs' own largest
+    asymmetry (``landmark_max``, relative to the diagonal), they must be symmetric within a scan's noise
+    too: pairs that say otherwise define another symmetry than the surface's best plane (a shape may have
+    several)."""
+    if landmark_max is not None and landmark_max >= SCAN_NOISE:
         return False
     return before["p99_relative"] < ALREADY_SYMMETRIC or (
         before["p99_relative"] < SCAN_NOISE and after["p90"] > (1 - WORSE_MARGIN) * before["p90"])

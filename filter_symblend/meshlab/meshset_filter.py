@@ -21,10 +21,12 @@ from concurrent.futures import Future, ThreadPoolExecutor
 import numpy as np
 import pymeshlab
 
+from ..core.report import LandmarkAsymmetry, Report
 from ..errors import MeshSetError, ParameterError, SymblendWarning
+from ..measures.checks import Checks
 from ..measures.hausdorff import two_way_distance
 from ..measures.surface_asymmetry import input_asymmetry, input_planes, output_asymmetry, pairs_plane
-from ..measures.verdict import nothing_to_restore, result_warnings
+from ..measures.verdict import nothing_to_restore
 from ..parameters import keyword_signature, parameters_doc, validate_parameters
 from ..pipeline import build_problem, solve_problem
 from . import recording
@@ -112,7 +114,8 @@ def _solved_plane(points: np.ndarray, landmarks, mirror_pairs):
 
 
 def _compute(mesh: pymeshlab.Mesh, options: dict, found: dict, progress, pool: ThreadPoolExecutor, seconds: dict):
-    """(the warp of ``mesh`` with the fill of its missing region, {report key: future} of its checks); no
+    """(the warp of ``mesh`` with the fill of its missing region, {"before", "after", "hausdorff": future} of
+    its checks); no
     layer added. ``options``: every parameter, validated; ``found``: the mesh's landmark attributes, read
     once (meshlab/attributes.read_attributes). The checks run in ``pool`` once the problem is
     valid, each against the solved pairs' plane on its surface (measures/surface_asymmetry): the input's
@@ -135,44 +138,58 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, found: dict, progress, pool: T
         """Submit the input's check, against the plane of the pairs solved; the future of its planes."""
         solved = _solved_plane(points, problem.landmarks, mirror_pairs)
         starts = pool.submit(_timed, seconds, "input_planes", input_planes, points, solved)
-        checks["mirror_asymmetry_before"] = pool.submit(_timed, seconds, "mirror_asymmetry_before", _mirror_check,
-                                                        input_asymmetry, points, faces, starts, diagonal, solved)
+        checks["before"] = pool.submit(_timed, seconds, "mirror_asymmetry_before", _mirror_check, input_asymmetry,
+                                       points, faces, starts, diagonal, solved)
         return starts
 
     if options["checks"] != "none" and options["pairs"] == "landmarks":  # the pairs are known: beside the warp
         starts = check_input(None)
     result = solve_problem(problem, progress)
     if options["checks"] != "none":
-        if "mirror_asymmetry_before" not in checks:  # automatic pairs: known now
+        if "before" not in checks:  # automatic pairs: known now
             starts = check_input(result.mirror_pairs)
-        checks["mirror_asymmetry_after"] = pool.submit(
+        checks["after"] = pool.submit(
             _timed, seconds, "mirror_asymmetry_after", _mirror_check, output_asymmetry, result.points, faces, starts,
             diagonal, _solved_plane(result.points, problem.landmarks, result.mirror_pairs))
     if options["checks"] == "full":
-        checks["hausdorff_input_output"] = pool.submit(_timed, seconds, "hausdorff_input_output", two_way_distance,
-                                                       points, faces, result.points, faces)
+        checks["hausdorff"] = pool.submit(_timed, seconds, "hausdorff_input_output", two_way_distance, points, faces,
+                                          result.points, faces)
     return result, checks
 
 
-def _needs_nothing(checks: dict[str, Future], landmarks: dict | None) -> bool:
+def _needs_nothing(checks: dict[str, Future], landmarks: LandmarkAsymmetry | None) -> bool:
     """Whether the (finished) checks and the landmark pairs' own asymmetry (``landmarks``, None without
     landmark pairs) say there is nothing to restore (measures/verdict.nothing_to_restore)."""
-    if "mirror_asymmetry_before" not in checks:
+    if "before" not in checks:
         return False
-    return nothing_to_restore(checks["mirror_asymmetry_before"].result(), checks["mirror_asymmetry_after"].result(),
-                              landmarks)
+    return nothing_to_restore(checks["before"].result(), checks["after"].result(),
+                              None if landmarks is None else landmarks.max_relative)
+
 
 
 def _the_input(result, points: np.ndarray, frame: str):
     """``result`` with the input ``points`` (N, 3) as its output (in the canonical ``frame`` if asked) and no
     asymmetry removed."""
     if frame == "canonical":
-        transform = np.array(result.report["canonical_from_input"])
+        transform = result.report.canonical_from_input
         points = points @ transform[:3, :3].T + transform[:3, 3]
     return dataclasses.replace(result, points=np.array(points, dtype=float), asymmetry=np.zeros(len(points)))
 
 
-def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict | None = None) -> dict:
+@dataclasses.dataclass(frozen=True)
+class FilterRun:
+    """One call of the filter: its ``report`` and the layers it read (``input_mesh_id``) and added."""
+
+    report: Report
+    input_mesh_id: int
+    output_mesh_id: int
+
+    def to_dict(self) -> dict:
+        """What ``generate_symmetrized_mesh`` returns: the report's JSON form and the two layer ids."""
+        return {**self.report.to_dict(), "input_mesh_id": self.input_mesh_id, "output_mesh_id": self.output_mesh_id}
+
+
+def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict | None = None) -> FilterRun:
     """``generate_symmetrized_mesh`` with an optional result ``cache`` (fingerprint -> result), so a
     script rehearsed on a copy of the MeshSet does not compute the same warp twice.
 
@@ -206,33 +223,27 @@ def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict |
             result, checks = _compute(mesh, options, carried, progress, pool, check_seconds)
             with recording.recorded_call(ms, options):
                 output_id = add_output_layer(ms, input_id, result, carried, list(checks.values()))
-                unchanged = _needs_nothing(checks, result.report.get("landmark_asymmetry_before"))
+                unchanged = _needs_nothing(checks, result.report.landmark_asymmetry_before)
                 if unchanged:  # rare: the layer is built again from the input rather than wait for the checks
                     result = _the_input(result, ms.mesh(input_id).vertex_matrix(), options["output_frame"])
                     ms.set_current_mesh(output_id)
                     ms.delete_current_mesh()
                     output_id = add_output_layer(ms, input_id, result, carried)
-        result.report.update({name: check.result() for name, check in checks.items()})
-        result.report["seconds"]["checks"] = check_seconds
-        if "mirror_asymmetry_after" in result.report:
-            report = result.report
-            report["warnings"] = result_warnings(
-                report["mirror_asymmetry_before"], report["mirror_asymmetry_after"],
-                report.get("hausdorff_input_output"), report["diagonal"], report["pair_count"],
-                options["pairs"] != "landmarks", unchanged)
-            if unchanged:  # the figures of the output given: the input's
-                report.update(nothing_to_restore=True, symmetrized_asymmetry=report["mirror_asymmetry_after"],
-                              mirror_asymmetry_after=report["mirror_asymmetry_before"])
-                if "hausdorff_input_output" in report:
-                    report["hausdorff_input_output"] = dict.fromkeys(report["hausdorff_input_output"], 0.0)
+        report = result.report
+        report = report.replace(seconds=dataclasses.replace(report.seconds, checks=check_seconds))
+        if "after" in checks:
+            report = report.replace(checks=Checks.measured({name: check.result() for name, check in checks.items()},
+                                                           report, options["pairs"] != "landmarks", unchanged))
+        result = dataclasses.replace(result, report=report)
         if cache is not None:
             cache[key] = result
-    seconds = {**result.report["seconds"], "filter": time.perf_counter() - clock}
-    return {**result.report, "seconds": seconds, "input_mesh_id": input_id, "output_mesh_id": output_id}
+    report = result.report
+    report = report.replace(seconds=dataclasses.replace(report.seconds, filter=time.perf_counter() - clock))
+    return FilterRun(report, input_id, output_id)
 
 
 def generate_symmetrized_mesh(ms: pymeshlab.MeshSet, progress=None, **params) -> dict:
-    return run_filter(ms, params, progress)
+    return run_filter(ms, params, progress).to_dict()
 
 
 _PROGRESS = inspect.Parameter("progress", inspect.Parameter.KEYWORD_ONLY, default=None)

@@ -49,7 +49,7 @@ def _run(ms: pymeshlab.MeshSet, plan: list, path, cache: dict, progress) -> list
         else:
             node, options = step
             try:
-                output = run_filter(ms, options, progress, cache)
+                output = run_filter(ms, options, progress, cache).to_dict()
             except SymblendError as error:
                 raise ScriptError(f"{node.where(path)}: {error}") from None
         results.append({"filter": node.name, "output": output})

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..auto import solve_with_automatic_pairs
 from ..core.mirror_fill import fill_from_mirror
+from ..core.geometry import MirrorPlane
 from ..core.solve import SymmetrizationResult, landmark_targets, scaled_progress, solve
 from ..core.uncertainty import jackknife
 from ..parameters import CORE, options_of
@@ -20,15 +21,15 @@ def _filled(result: SymmetrizationResult, points, faces, missing, missing_faces,
     """``result`` (input frame) with the missing region given the mirror shape of the intact side, then in
     ``frame``; the asymmetry stays the distance moved in the input frame."""
     report = result.report
-    filled = fill_from_mirror(result.points, faces, missing, report["plane_normal"], report["plane_offset"],
+    filled = fill_from_mirror(result.points, faces, missing, report.plane.normal, report.plane.offset,
                               missing_faces)
-    report["filled_vertices"] = int(np.count_nonzero(missing))
-    result = dataclasses.replace(result, points=filled, asymmetry=np.linalg.norm(filled - points, axis=1))
+    report = report.replace(filled_vertices=int(np.count_nonzero(missing)))
     if frame == "canonical":
-        transform = np.array(report["canonical_from_input"])
-        result = dataclasses.replace(result, points=result.points @ transform[:3, :3].T + transform[:3, 3])
-        report.update(output_frame="canonical", plane_normal=[1.0, 0.0, 0.0], plane_offset=0.0)
-    return result
+        transform = report.canonical_from_input
+        report = report.replace(output_frame="canonical", plane=MirrorPlane(np.array([1.0, 0.0, 0.0]), 0.0))
+        return dataclasses.replace(result, points=filled @ transform[:3, :3].T + transform[:3, 3], report=report,
+                                   asymmetry=np.linalg.norm(filled - points, axis=1))
+    return dataclasses.replace(result, points=filled, asymmetry=np.linalg.norm(filled - points, axis=1), report=report)
 
 
 def _with_uncertainty(result: SymmetrizationResult, problem: Problem, core: dict, progress) -> SymmetrizationResult:
@@ -39,10 +40,10 @@ def _with_uncertainty(result: SymmetrizationResult, problem: Problem, core: dict
                        "landmarks left out in turn")
     full = landmark_targets(problem.points, problem.landmarks, core)
     measured = jackknife(problem.points, problem.landmarks, core, full)
-    result.report["uncertainty"] = measured.summary(result.report["diagonal"])
     if progress is not None:
         progress(100.0, "done")
-    return dataclasses.replace(result, uncertainty=measured.per_vertex)
+    return dataclasses.replace(result, uncertainty=measured.per_vertex,
+                               report=result.report.replace(uncertainty=measured.summary(result.report.diagonal)))
 
 
 def solve_problem(problem: Problem, progress=None) -> SymmetrizationResult:

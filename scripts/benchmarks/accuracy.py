@@ -46,7 +46,7 @@ def accuracy_main(args) -> None:
                 for mode in MODES:
                     cells.append(errors(symmetrize(deformed, left, right, mode=mode).points, points,
                                         all_left, all_right, region))
-                seconds = [symmetrize(deformed, left, right, mode="affine").report["seconds"]
+                seconds = [symmetrize(deformed, left, right, mode="affine").report.seconds.to_dict()
                            for _ in range(args.repeat)]
                 cells += [f"{statistics.median(s[stage] for s in seconds):.3f}" for stage in STAGES]
                 print(f"| {mesh} | {name} | {count} | " + " | ".join(cells) + " |", flush=True)

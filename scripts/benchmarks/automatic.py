@@ -67,11 +67,10 @@ def auto_main(args) -> None:
             if automatic is None:
                 cells += ["-", "-", "-"]
             else:
-                rounds = automatic.report["auto_pairs"]
-                cells += [f"{rounds['pair_count']} ({rounds['twins_are']})",
-                          f"{len(rounds['rounds'])} ({rounds['stopped']})",
-                          f"{automatic.report['seconds']['total']:.2f}"]
-            cells.append(f"{hybrid.report['seconds']['total']:.2f}")
+                rounds = automatic.report.auto_pairs
+                cells += [f"{rounds.pair_count} ({rounds.twins_are})", f"{len(rounds.rounds)} ({rounds.stopped})",
+                          f"{automatic.report.seconds.total:.2f}"]
+            cells.append(f"{hybrid.report.seconds.total:.2f}")
             print(f"| {mesh} | {name} | " + " | ".join(cells) + " |", flush=True)
 
 

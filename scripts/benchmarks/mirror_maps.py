@@ -202,8 +202,8 @@ def mirror_maps_main(args) -> None:
                 totals["far_total"] += int(far.sum())
                 totals["far_found"] += int((far & doubtful).sum())
                 finds = f"{np.mean(doubtful[wrong]):.0%} of {wrong.sum()}" if wrong.any() else "none wrong"
-                warns = "yes" if result.report["auto_pairs"].get("warnings") else "no"
-                auto = (f"{summary(errors)} | {pairs.report['confident_share']:.0%} | {finds} | {warns} | "
+                warns = "yes" if result.report.auto_pairs.warnings else "no"
+                auto = (f"{summary(errors)} | {pairs.report.confident_share:.0%} | {finds} | {warns} | "
                         f"{seconds:.1f}")
             totals["auto"].append(np.median(errors))
             start = time.perf_counter()

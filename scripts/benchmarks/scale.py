@@ -65,7 +65,7 @@ def scale_meshes(meshes, counts):
                 continue
             result, ours, memory = measured(symmetrize, deformed, left, right, **SCAN_OPTIONS)
             report = result.report
-            method = "approximate" if "patches" in report["warp"] else "exact"
+            method = "approximate" if "patches" in report.warp else "exact"
             baseline = "out of reach"
             ratio = ""
             if 2 * len(left) <= BASELINE_CENTRES:
@@ -74,8 +74,8 @@ def scale_meshes(meshes, counts):
                 seconds = time.perf_counter() - start
                 baseline, ratio = f"{seconds:.2f}", f"{seconds / ours:.1f}x"
             print(f"| {name} | {len(points):,} | {len(left):,} | {method} | {ours:.2f} | "
-                  f"{report['seconds']['warp']:.2f} | {memory:.0f} | "
-                  f"{report['landmark_asymmetry_after']['max_relative']:.1e} | {baseline} | {ratio} |", flush=True)
+                  f"{report.seconds.stages['warp']:.2f} | {memory:.0f} | "
+                  f"{report.landmark_asymmetry_after.max_relative:.1e} | {baseline} | {ratio} |", flush=True)
 
 
 def approximation_against_exact(points, faces, count):
@@ -93,12 +93,12 @@ def approximation_against_exact(points, faces, count):
     edges = np.unique(np.sort(np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
     lengths = [np.linalg.norm(out[edges[:, 0]] - out[edges[:, 1]], axis=1) for out in (exact.points, approximate.points)]
     change = np.abs(lengths[1] - lengths[0]) / lengths[0]
-    diagonal = exact.report["diagonal"]
+    diagonal = exact.report.diagonal
     print(f"\nApproximate warp ({warp.SUBSET_CENTRES:,} landmarks exact + local splines on patches) against the exact "
           f"spline, {len(points):,} vertices, {len(left):,} pairs ({2 * len(left):,} landmarks), as above")
     print("| warp s exact | warp s approximate | max distance / diagonal | edge length change: worst | 99.9 % | median |")
     print("|---|---|---|---|---|---|")
-    print(f"| {exact.report['seconds']['warp']:.2f} | {approximate.report['seconds']['warp']:.2f} | "
+    print(f"| {exact.report.seconds.stages['warp']:.2f} | {approximate.report.seconds.stages['warp']:.2f} | "
           f"{np.abs(approximate.points - exact.points).max() / diagonal:.1e} | {change.max():.1%} | "
           f"{np.quantile(change, 0.999):.2%} | {np.median(change):.3%} |", flush=True)
 
@@ -120,7 +120,7 @@ def table_1():
     for model, count, paper in TABLE_1:
         left, right = synthetic.farthest_point_pairs(points, offset, partner, count)
         report = symmetrize(points, left, right, mode="affine").report
-        total = report["seconds"]["total"]
+        total = report.seconds.total
         print(f"| {model} | {count} | {paper} | {total:.2f} | {paper / total:.0f}x |", flush=True)
 
 

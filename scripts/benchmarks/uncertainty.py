@@ -130,7 +130,7 @@ def _detection(rng) -> None:
                     if right[j] in set(left) | set(np.delete(right, j)):
                         continue
                     report = quiet(symmetrize, deformed, left, right, mode=mode, uncertainty="jackknife").report
-                    named += report["uncertainty"]["most_influential_pair"] == str(j + 1)
+                    named += report.uncertainty.most_influential_pair == str(j + 1)
                     tried += 1
                 cells.append(f"{named}/{tried}")
             print(f"| {name} | {moved:.0%} | " + " | ".join(cells) + " |")
