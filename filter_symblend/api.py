@@ -12,7 +12,7 @@ from .core.mirror_pairs import MirrorPairs
 from .core.solve import SymmetrizationResult
 from .errors import ParameterError
 from .parameters import ARRAYS, keyword_signature, parameters_doc, validate_parameters
-from .pipeline import build_problem, solve_problem
+from .pipeline import MissingRegion, build_problem, solve_problem
 
 
 def symmetrize(points, left=None, right=None, pair_ids=None, midline=None, left_weights=None,
@@ -20,8 +20,9 @@ def symmetrize(points, left=None, right=None, pair_ids=None, midline=None, left_
                missing=None, missing_faces=None, **params) -> SymmetrizationResult:
     given = None if left is None and right is None and midline is None else \
         LandmarkPairs(pair_ids, left, right, midline, left_weights, right_weights)
+    region = None if missing is None and missing_faces is None else MissingRegion(missing, missing_faces)
     problem = build_problem(points, validate_parameters(params, ARRAYS), given, faces, auto_excluded, auto_config,
-                            missing, missing_faces)
+                            region)
     return solve_problem(problem, progress)
 
 

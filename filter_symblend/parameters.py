@@ -230,12 +230,21 @@ ARRAYS = ("core", "pairs")
 ALL = ("core", "pairs", "meshset")
 
 
-def validate_parameters(given: dict[str, Any], layers: tuple[str, ...] = ALL) -> dict[str, Any]:
-    """Fill defaults, check every value; unknown names raise with the closest valid name.
+class Options(dict):
+    """Every parameter of some layers, defaults filled and each value checked: what
+    :func:`validate_parameters` returns, so that a door that receives one (a filter script's node, checked
+    when the script is read) does not check it again."""
+
+
+def validate_parameters(given: dict[str, Any], layers: tuple[str, ...] = ALL) -> Options:
+    """Fill defaults, check every value; unknown names raise with the closest valid name. ``given`` already
+    validated for these layers (an :class:`Options` with their parameters) is returned as it is.
 
     Only the parameters of ``layers`` are accepted (see :class:`Parameter`).
     """
     accepted = [p for p in PARAMETERS if p.layer in layers]
+    if isinstance(given, Options) and list(given) == [p.name for p in accepted]:
+        return given
     names = [p.name for p in accepted]
     for name in given:
         if name not in names:
@@ -244,7 +253,7 @@ def validate_parameters(given: dict[str, Any], layers: tuple[str, ...] = ALL) ->
             raise ParameterError(
                 f"Unknown parameter `{name}`.{hint} Valid parameters: {', '.join(names)}."
             )
-    return {p.name: p.validate(given.get(p.name, p.default)) for p in accepted}
+    return Options({p.name: p.validate(given.get(p.name, p.default)) for p in accepted})
 
 
 def options_of(options: dict[str, Any], layers: tuple[str, ...]) -> dict[str, Any]:

@@ -140,6 +140,32 @@ def test_ply_output_round_trips_its_attributes_and_symmetrizes_again(tmp_path, b
     assert np.abs(ms.current_mesh().vertex_matrix() - before).max() < 1e-8  # already symmetric
 
 
+def test_the_landmark_file_alone_gives_the_pairs_whatever_attributes_the_mesh_file_carries(tmp_path, bent_cow_files):
+    """The command hands the file's pairs to the filter as pairs, not through the mesh's attributes: a mesh
+    file that carries a stale weight attribute (0 at two landmarks, as an earlier run with ``--missing``
+    leaves it) changes nothing, and the output carries the file's pairs alone."""
+    from filter_symblend.commands.mesh_io import save_mesh
+    from filter_symblend.meshlab.ply_attributes import load_mesh_with_attributes
+
+    mesh_path, landmark_path, deformed, left, right = bent_cow_files
+    clean, stale = tmp_path / "clean.json", tmp_path / "stale.json"
+    assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "-o", str(tmp_path / "clean.ply"),
+                 "--report", str(clean)]) == 0
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(mesh_path))
+    weights = np.ones(len(deformed))
+    weights[[left[2], right[3]]] = 0.0
+    ms.current_mesh().add_vertex_custom_scalar_attribute(weights, "symblend_weight")
+    save_mesh(ms, tmp_path / "stale.ply")
+    output = tmp_path / "out.ply"
+    assert main(["symmetrize", str(tmp_path / "stale.ply"), "-l", str(landmark_path), "-o", str(output),
+                 "--report", str(stale)]) == 0
+    ms = pymeshlab.MeshSet()
+    assert sorted(load_mesh_with_attributes(ms, output)) == ["symblend_asymmetry", "symblend_pair"]
+    before, after = (json.loads(path.read_text()) for path in (clean, stale))
+    assert after["vertex_displacement"] == pytest.approx(before["vertex_displacement"], rel=1e-9)
+
+
 def test_ascii_ply_properties(tmp_path):
     from filter_symblend.meshlab.ply_attributes import read_ply_vertex_properties
 

@@ -108,6 +108,21 @@ def _pairs(ms):
     return left, right
 
 
+def test_a_script_node_is_validated_once_when_the_script_is_read(tmp_path, holed_cow, monkeypatch):
+    """Its options are checked when the script is read (so a bad node changes nothing), and not again at
+    each of its runs (the rehearsal on a copy and the real one)."""
+    from filter_symblend import parameters
+
+    path = script(tmp_path, OUR_NODE.format(params=param("RichFloat", "phi_width", 6)))
+    checked = []
+    validate = parameters.Parameter.validate
+    monkeypatch.setattr(parameters.Parameter, "validate", lambda self, value: checked.append(self.name) or
+                        validate(self, value))
+    steps = apply_filter_script(holed_cow, path)
+    assert steps[0]["output"]["phi_width"] == 6
+    assert sorted(checked) == sorted(p.name for p in PARAMETERS)  # each parameter once
+
+
 @pytest.mark.parametrize("filters, message", [
     (['<filter name="Close Hole"/>'], "no version of MeshLab had a filter of this name. The closest MeshLab filter "
                                       "is 'Close Holes' (pymeshlab: meshing_close_holes)"),

@@ -1,12 +1,14 @@
 """A landmark file given to the ``symblend`` command, snapped onto the loaded mesh: paired (by name, by a
-pair table or by geometry, said on stderr and written as a pair table to check) and stored as the
-filter's attributes."""
+pair table or by geometry, said on stderr and written as a pair table to check), then handed to the filter
+as pairs (``symblend symmetrize``) or stored as its attributes for a filter script (``symblend mlx``)."""
 
 from __future__ import annotations
 
+import dataclasses
 import pathlib
 import sys
 
+from ..core.landmark_pairs import LandmarkPairs
 from ..errors import SymblendError
 from ..landmarks.from_file import pairs_from_landmark_file
 from ..landmarks.pairing import write_pair_table
@@ -52,15 +54,18 @@ def geometric_pairing_note(snapped, args, folder: pathlib.Path) -> str | None:
     return str(path) if path else None
 
 
-def write_landmarks(ms, args, names: dict) -> dict:
-    """Snap the landmark file onto the current mesh and store it as the attributes ``names``."""
+def read_landmarks(ms, args) -> tuple[LandmarkPairs, dict]:
+    """The landmark file of ``args`` snapped onto the current mesh of ``ms`` and paired, with the weights
+    of ``--missing`` (0 for the landmarks it names), and what the report records of it (names, pairing,
+    snap distances, each landmark's vertex)."""
     snapped = snapped_pairs(ms, args)
     table = geometric_pairing_note(snapped, args, args.output.parent)
     missing = [name.strip() for name in args.missing.split(",") if name.strip()]
-    left_weights, right_weights = snapped.weights(missing) if missing else (None, None)
-    write_landmark_attributes(ms.current_mesh(), snapped.pairs, left_weights, right_weights, names["pair_attribute"],
-                              names["midline_attribute"], names["weight_attribute"])
-    return {"file": str(args.landmarks), "frame": snapped.frame_note, "pairing": snapped.pairing,
+    pairs = snapped.pairs
+    if missing:
+        left_weights, right_weights = snapped.weights(missing)
+        pairs = dataclasses.replace(pairs, left_weights=left_weights, right_weights=right_weights)
+    return pairs, {"file": str(args.landmarks), "frame": snapped.frame_note, "pairing": snapped.pairing,
             "pair_table_written": table, "pairs": [list(p) for p in snapped.pair_names],
             "midline": snapped.midline_names, "curves": snapped.curves,
             "placed_point_spacing": snapped.placed_spacing, "missing": missing,
@@ -69,3 +74,13 @@ def write_landmarks(ms, args, names: dict) -> dict:
                 ([a for a, _ in snapped.pair_names], snapped.pairs.left),
                 ([b for _, b in snapped.pair_names], snapped.pairs.right),
                 (snapped.midline_names, snapped.pairs.midline)) for name, vertex in zip(names, vertices)]}
+
+
+def write_landmarks(ms, args, names: dict) -> dict:
+    """:func:`read_landmarks`, stored as the attributes ``names`` of the current mesh (for a filter script,
+    whose node reads them); the record."""
+    pairs, record = read_landmarks(ms, args)
+    write_landmark_attributes(ms.current_mesh(), pairs, *((pairs.left_weights, pairs.right_weights)
+                                                           if pairs.is_weighted() else (None, None)),
+                              names["pair_attribute"], names["midline_attribute"], names["weight_attribute"])
+    return record

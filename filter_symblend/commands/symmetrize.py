@@ -13,7 +13,7 @@ from ..errors import SymblendError
 from ..meshlab.meshset_filter import FilterRun, run_filter
 from ..parameters import PARAMETERS
 from .console import progress_display
-from .landmark_input import write_landmarks
+from .landmark_input import read_landmarks
 from .mesh_io import check_outputs, load_mesh, save_with_report
 from .options import add_symmetrize_arguments
 
@@ -60,10 +60,10 @@ def symmetrize_files(args, progress=None) -> Symmetrized:
         raise SymblendError(f"{args.output}: a {args.output.suffix} file holds points only, and {args.input} has faces: "
                             "they would be lost with the per-vertex asymmetry; write .ply (or .obj, .off for the "
                             "faces alone).")
-    landmarks = None if automatic else write_landmarks(ms, args, params)
+    pairs, landmarks = (None, None) if automatic else read_landmarks(ms, args)
     if landmarks and landmarks["curves"] and not params["width_spacing"]:
         params["width_spacing"] = landmarks["placed_point_spacing"]  # semilandmarks leave the widths as they were
-    done = Symmetrized(run_filter(ms, params, progress), landmarks, ms)
+    done = Symmetrized(run_filter(ms, params, progress, landmarks=pairs), landmarks, ms)
     save_with_report(ms, args.output, args.report, done.document())
     return done
 

@@ -36,6 +36,10 @@ class LandmarkPairs:
             if getattr(self, side) is None and isinstance(self.ids, np.ndarray):  # a reader's: labels known
                 object.__setattr__(self, side, np.ones(len(self.ids)))
 
+    def is_weighted(self) -> bool:
+        """Whether any landmark has a weight other than 1 (a missing side, a pair of priority)."""
+        return bool(np.any(np.asarray(self.left_weights) != 1) or np.any(np.asarray(self.right_weights) != 1))
+
     def both_sides(self) -> tuple[np.ndarray, np.ndarray]:
         """(left, right) vertices (c,) of the pairs given on both sides (weight > 0 on each): the pairs that
         say where the mirror plane is."""

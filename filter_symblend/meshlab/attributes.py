@@ -47,23 +47,35 @@ def pair_labels(n_vertices: int, pairs: LandmarkPairs) -> np.ndarray:
     return labels
 
 
+def landmark_attribute_values(n_vertices: int, pairs: LandmarkPairs, names: tuple[str, str, str],
+                              left_weights=None, right_weights=None) -> dict[str, np.ndarray]:
+    """The attributes that encode ``pairs`` on a mesh of ``n_vertices``: {name: (N,)} for the pair
+    attribute, the midline attribute when there are midline landmarks and the weight attribute when weights
+    are given; ``names``: (pair, midline, weight) attribute names."""
+    pair_attribute, midline_attribute, weight_attribute = names
+    values = {pair_attribute: pair_labels(n_vertices, pairs)}
+    if len(pairs.midline):
+        midline = np.zeros(n_vertices)
+        midline[pairs.midline] = np.arange(1, len(pairs.midline) + 1)
+        values[midline_attribute] = midline
+    if left_weights is not None or right_weights is not None:
+        weights = np.ones(n_vertices)
+        weights[pairs.left] = 1.0 if left_weights is None else left_weights
+        weights[pairs.right] = 1.0 if right_weights is None else right_weights
+        values[weight_attribute] = weights
+    return values
+
+
 def write_landmark_attributes(mesh: pymeshlab.Mesh, pairs: LandmarkPairs, left_weights=None,
                               right_weights=None, pair_attribute: str = DEFAULTS["pair_attribute"],
                               midline_attribute: str = DEFAULTS["midline_attribute"],
                               weight_attribute: str = DEFAULTS["weight_attribute"]) -> None:
     """Add the pair attribute, and the midline and weight attributes when there are any, to
     ``mesh`` (a mesh of a MeshSet: add attributes after ``ms.add_mesh``, not before)."""
-    n = mesh.vertex_number()
-    mesh.add_vertex_custom_scalar_attribute(pair_labels(n, pairs), pair_attribute)
-    if len(pairs.midline):
-        midline = np.zeros(n)
-        midline[pairs.midline] = np.arange(1, len(pairs.midline) + 1)
-        mesh.add_vertex_custom_scalar_attribute(midline, midline_attribute)
-    if left_weights is not None or right_weights is not None:
-        weights = np.ones(n)
-        weights[pairs.left] = 1.0 if left_weights is None else left_weights
-        weights[pairs.right] = 1.0 if right_weights is None else right_weights
-        mesh.add_vertex_custom_scalar_attribute(weights, weight_attribute)
+    names = (pair_attribute, midline_attribute, weight_attribute)
+    for name, values in landmark_attribute_values(mesh.vertex_number(), pairs, names, left_weights,
+                                                  right_weights).items():
+        mesh.add_vertex_custom_scalar_attribute(values, name)
 
 
 def pairs_from_attribute(values: np.ndarray, attribute: str) -> LandmarkPairs:

@@ -21,6 +21,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 import numpy as np
 import pymeshlab
 
+from ..core.landmark_pairs import LandmarkPairs
 from ..core.report import LandmarkAsymmetry, Report
 from ..errors import MeshSetError, ParameterError, SymblendWarning
 from ..measures.checks import Checks
@@ -28,9 +29,9 @@ from ..measures.hausdorff import two_way_distance
 from ..measures.surface_asymmetry import input_asymmetry, input_planes, output_asymmetry, pairs_plane
 from ..measures.verdict import nothing_to_restore
 from ..parameters import keyword_signature, parameters_doc, validate_parameters
-from ..pipeline import build_problem, solve_problem
+from ..pipeline import MissingRegion, build_problem, solve_problem
 from . import recording
-from .attributes import landmarks_from_attributes, read_attributes
+from .attributes import landmark_attribute_values, landmarks_from_attributes, read_attributes
 from .output_layer import (ASYMMETRY_ATTRIBUTE, CONFIDENCE_ATTRIBUTE, TWIN_ATTRIBUTE, UNCERTAINTY_ATTRIBUTE,
                            add_output_layer)
 
@@ -41,10 +42,9 @@ WRITTEN = (ASYMMETRY_ATTRIBUTE, TWIN_ATTRIBUTE, CONFIDENCE_ATTRIBUTE, UNCERTAINT
 
 
 def _missing_region(mesh: pymeshlab.Mesh, faces: np.ndarray, region: str, weight_attribute: str,
-                    weights: np.ndarray | None):
-    """(missing (N,) in [0, 1], faces excluded from the intact surface (F,) bool) for
-    ``missing_region``, or None for 'none'; ``faces`` (F, 3): the mesh's, as read; ``weights``: the mesh's
-    ``weight_attribute`` (None: it has none)."""
+                    weights: np.ndarray | None) -> MissingRegion | None:
+    """The missing region ``missing_region`` names, or None for 'none'; ``faces`` (F, 3): the mesh's, as
+    read; ``weights``: the mesh's ``weight_attribute`` (None: it has none)."""
     if region == "none":
         return None
     if mesh.is_point_cloud():
@@ -56,7 +56,7 @@ def _missing_region(mesh: pymeshlab.Mesh, faces: np.ndarray, region: str, weight
                 f"`missing_region='weight'` reads the per-vertex attribute `{weight_attribute}`, and the "
                 f"current mesh ('{mesh.label()}') has none. Add it (1 intact, 0 missing), or use "
                 "missing_region='selection'.")
-        return 1.0 - np.clip(weights, 0.0, 1.0), np.zeros(len(faces), dtype=bool)
+        return MissingRegion(1.0 - np.clip(weights, 0.0, 1.0))
     selected_faces = mesh.face_selection_array()
     missing = mesh.vertex_selection_array().astype(float)
     unselected_face_at = np.zeros(mesh.vertex_number(), dtype=bool)
@@ -70,7 +70,7 @@ def _missing_region(mesh: pymeshlab.Mesh, faces: np.ndarray, region: str, weight
                       "its new faces with ms.meshing_close_holes(newfaceselected=True, refinehole=True).)",
                       SymblendWarning, stacklevel=4)
         return None
-    return missing, selected_faces
+    return MissingRegion(missing, selected_faces)
 
 
 def _fingerprint(mesh: pymeshlab.Mesh, options: dict, found: dict[str, np.ndarray]) -> str:
@@ -113,23 +113,23 @@ def _solved_plane(points: np.ndarray, landmarks, mirror_pairs):
     return pairs_plane(points[left], points[right])
 
 
-def _compute(mesh: pymeshlab.Mesh, options: dict, found: dict, progress, pool: ThreadPoolExecutor, seconds: dict):
+def _compute(mesh: pymeshlab.Mesh, options: dict, found: dict, given: LandmarkPairs | None, progress,
+             pool: ThreadPoolExecutor, seconds: dict):
     """(the warp of ``mesh`` with the fill of its missing region, {"before", "after", "hausdorff": future} of
     its checks); no
     layer added. ``options``: every parameter, validated; ``found``: the mesh's landmark attributes, read
-    once (meshlab/attributes.read_attributes). The checks run in ``pool`` once the problem is
+    once (meshlab/attributes.read_attributes); ``given``: the landmarks a caller already holds, used instead
+    of decoding ``found``. The checks run in ``pool`` once the problem is
     valid, each against the solved pairs' plane on its surface (measures/surface_asymmetry): the input's
     beside the warp with landmark pairs, once they are known with automatic pairs; the output's once the
     warp is known. Each check's own seconds go to ``seconds`` under its report key."""
     faces = mesh.face_matrix()
     region = _missing_region(mesh, faces, options["missing_region"], options["weight_attribute"],
                              found.get(options["weight_attribute"]))
-    missing, missing_faces = (None, None) if region is None else region
-    landmarks = None  # with automatic pairs alone, the landmark attributes are only carried
-    if options["pairs"] != "auto":
+    landmarks = given  # with automatic pairs alone, the landmark attributes are only carried
+    if options["pairs"] != "auto" and given is None:
         landmarks = landmarks_from_attributes(found, mesh.label(), *(options[name] for name in _ATTRIBUTE_OPTIONS))
-    problem = build_problem(mesh.vertex_matrix(), options, landmarks, faces, missing=missing,
-                            missing_faces=missing_faces)
+    problem = build_problem(mesh.vertex_matrix(), options, landmarks, faces, missing=region)
     points, faces = problem.points, problem.faces
     diagonal = problem.diagonal
     checks = {}
@@ -189,9 +189,12 @@ class FilterRun:
         return {**self.report.to_dict(), "input_mesh_id": self.input_mesh_id, "output_mesh_id": self.output_mesh_id}
 
 
-def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict | None = None) -> FilterRun:
+def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict | None = None,
+               landmarks: LandmarkPairs | None = None) -> FilterRun:
     """``generate_symmetrized_mesh`` with an optional result ``cache`` (fingerprint -> result), so a
-    script rehearsed on a copy of the MeshSet does not compute the same warp twice.
+    script rehearsed on a copy of the MeshSet does not compute the same warp twice. ``landmarks``: pairs
+    the caller already holds (the command, from a landmark file), used instead of the mesh's attributes
+    and written as those attributes onto the output layer only (unchecked; the problem checks them).
 
     The before/after checks (numpy and scipy) run in a second thread beside the warp and beside
     MeshLab's filters building the output layer (which release the GIL). The report's ``seconds`` holds the
@@ -211,7 +214,12 @@ def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict |
             f"`pair_attribute`, `midline_attribute` and `weight_attribute` must be three different "
             f"names, none of them {', '.join(f'`{name}`' for name in WRITTEN)} (the filter writes them); "
             f"got {', '.join(names)}.")
-    carried = read_attributes(mesh, names)  # read once: the landmarks, the missing region, the output layer
+    if landmarks is None:  # read once: the landmarks, the missing region, the output layer
+        carried = read_attributes(mesh, names)
+    else:
+        carried = landmark_attribute_values(mesh.vertex_number(), landmarks, tuple(names),
+                                            *((landmarks.left_weights, landmarks.right_weights)
+                                              if landmarks.is_weighted() else ()))
     key = None if cache is None else _fingerprint(mesh, options, carried)
     result = None if cache is None else cache.get(key)
     if result is not None:
@@ -220,7 +228,7 @@ def run_filter(ms: pymeshlab.MeshSet, params: dict, progress=None, cache: dict |
     else:
         check_seconds = {}
         with ThreadPoolExecutor(max_workers=1) as pool:
-            result, checks = _compute(mesh, options, carried, progress, pool, check_seconds)
+            result, checks = _compute(mesh, options, carried, landmarks, progress, pool, check_seconds)
             with recording.recorded_call(ms, options):
                 output_id = add_output_layer(ms, input_id, result, carried, list(checks.values()))
                 unchanged = _needs_nothing(checks, result.report.landmark_asymmetry_before)

@@ -2,7 +2,7 @@
 ``solve_problem``; every door (the array API in ``filter_symblend.api``, the MeshSet filter in meshlab/,
 the command through it) translates its medium into the problem and the result back."""
 
-from .problem import Problem, build_problem
+from .problem import MissingRegion, Problem, build_problem
 from .run import solve_problem
 
-__all__ = ["Problem", "build_problem", "solve_problem"]
+__all__ = ["MissingRegion", "Problem", "build_problem", "solve_problem"]

@@ -20,20 +20,30 @@ MINIMUM_UNITS = 3  # landmark pairs and midline landmarks the jackknife needs: e
 
 
 @dataclasses.dataclass(frozen=True)
+class MissingRegion:
+    """A part of the mesh that takes the mirror shape of the intact side: ``vertices`` (N,) in [0, 1], how
+    much each vertex is missing (1: wholly), and ``faces`` (F,) bool, faces that are not intact surface though
+    their vertices are (a hole filler's patch; None: none). As given, unchecked (``vertices`` None: faces
+    given alone, which ``build_problem`` refuses), until ``build_problem``."""
+
+    vertices: np.ndarray
+    faces: np.ndarray | None = None
+
+
+@dataclasses.dataclass(frozen=True)
 class Problem:
     """One symmetrization, validated: ``points`` (N, 3) float, ``faces`` (F, 3) int (none: a point cloud),
     ``landmarks`` (None with ``pairs='auto'``), ``options`` (every parameter, validated by
     ``parameters.validate_parameters``), ``excluded`` vertex indices (k,) the automatic pairs may not use
-    (or None), the ``missing`` part (N,) in [0, 1] and ``missing_faces`` (F,) bool (both None without
-    one), and the automatic pairs' ``auto_config``."""
+    (or None), the ``missing`` region (checked: its faces a (F,) bool array; None without one), and the
+    automatic pairs' ``auto_config``."""
 
     points: np.ndarray
     faces: np.ndarray
     landmarks: LandmarkPairs | None
     options: dict
     excluded: np.ndarray | None
-    missing: np.ndarray | None
-    missing_faces: np.ndarray | None
+    missing: MissingRegion | None
     auto_config: AutoConfig
 
     @functools.cached_property
@@ -43,18 +53,18 @@ class Problem:
 
 
 def build_problem(points, options: dict, landmarks: LandmarkPairs | None = None, faces=None, auto_excluded=None,
-                  auto_config=None, missing=None, missing_faces=None) -> Problem:
+                  auto_config=None, missing: MissingRegion | None = None) -> Problem:
     """The :class:`Problem` of these arguments (see ``filter_symblend.symmetrize``), checked in the order of the
-    module doc; ``options`` already validated (``parameters.validate_parameters``), ``landmarks`` as a reader
-    or the caller gave them (unchecked; None: none given). Raises ParameterError or LandmarkError /
-    GeometryError naming the argument, pair or vertex at fault."""
+    module doc; ``options`` already validated (``parameters.validate_parameters``), ``landmarks`` and the
+    ``missing`` region as a reader or the caller gave them (unchecked; None: none given). Raises
+    ParameterError or LandmarkError / GeometryError naming the argument, pair or vertex at fault."""
     points = check_points(points)
     faces = _faces(faces, len(points))
     excluded = _excluded_vertices(auto_excluded, len(points), options["pairs"])
-    region = _missing(missing, missing_faces, points, faces)
+    region = None if missing is None else _missing(missing, points, faces)
     if region is not None and options["pairs"] != "landmarks":  # its pairs would pull the intact side toward it
         excluded = np.union1d(np.zeros(0, dtype=np.int64) if excluded is None else excluded,
-                              np.flatnonzero(region[0] > 0))
+                              np.flatnonzero(region.vertices > 0))
     if options["pairs"] == "auto" and landmarks is not None:
         raise LandmarkError("`pairs='auto'` finds its own pairs and ignores landmarks; to use "
                             "yours as well, pass pairs='landmarks+auto'.")
@@ -65,8 +75,7 @@ def build_problem(points, options: dict, landmarks: LandmarkPairs | None = None,
         landmarks = check_landmarks(points, landmarks.left, landmarks.right, landmarks.ids, landmarks.midline,
                                     landmarks.left_weights, landmarks.right_weights)
     _check_uncertainty(options, landmarks)
-    return Problem(points, faces, landmarks, options, excluded, *(region or (None, None)),
-                   auto_config or DEFAULT)
+    return Problem(points, faces, landmarks, options, excluded, region, auto_config or DEFAULT)
 
 
 def _check_uncertainty(options: dict, landmarks) -> None:
@@ -124,20 +133,18 @@ def _faces(faces, count: int) -> np.ndarray:
     return faces
 
 
-def _missing(missing, missing_faces, points: np.ndarray, faces: np.ndarray):
-    """(missing (N,) in [0, 1], faces left out of the intact surface (F,) bool) checked, or None."""
-    if missing is None:
-        if missing_faces is not None:
-            raise ParameterError("`missing_faces` marks faces of the missing region; give `missing` too.")
-        return None
+def _missing(missing: MissingRegion, points: np.ndarray, faces: np.ndarray) -> MissingRegion:
+    """The ``missing`` region checked: its vertices (N,) clipped to [0, 1], its faces a (F,) bool array."""
+    if missing.vertices is None:
+        raise ParameterError("`missing_faces` marks faces of the missing region; give `missing` too.")
     if len(faces) == 0:
         raise ParameterError("`missing` vertices take the mirror shape of the intact surface, and there is none "
                              "without faces; pass `faces`, or leave `missing` out.")
-    values = np.asarray(missing, dtype=float)
+    values = np.asarray(missing.vertices, dtype=float)
     if values.shape != (len(points),) or not np.isfinite(values).all():
         raise ParameterError(f"`missing` needs one finite value in [0, 1] per vertex ({len(points)}), got "
                              f"shape {values.shape}.")
-    excluded = np.zeros(len(faces), dtype=bool) if missing_faces is None else np.asarray(missing_faces, dtype=bool)
+    excluded = np.zeros(len(faces), dtype=bool) if missing.faces is None else np.asarray(missing.faces, dtype=bool)
     if excluded.shape != (len(faces),):
         raise ParameterError(f"`missing_faces` needs one bool per face ({len(faces)}), got shape {excluded.shape}.")
-    return np.clip(values, 0.0, 1.0), excluded
+    return MissingRegion(np.clip(values, 0.0, 1.0), excluded)

@@ -14,16 +14,16 @@ from ..core.geometry import MirrorPlane
 from ..core.solve import SymmetrizationResult, landmark_targets, scaled_progress, solve
 from ..core.uncertainty import jackknife
 from ..parameters import CORE, options_of
-from .problem import Problem
+from .problem import MissingRegion, Problem
 
 
-def _filled(result: SymmetrizationResult, points, faces, missing, missing_faces, frame: str) -> SymmetrizationResult:
+def _filled(result: SymmetrizationResult, points, faces, missing: MissingRegion, frame: str) -> SymmetrizationResult:
     """``result`` (input frame) with the missing region given the mirror shape of the intact side, then in
     ``frame``; the asymmetry stays the distance moved in the input frame."""
     report = result.report
-    filled = fill_from_mirror(result.points, faces, missing, report.plane.normal, report.plane.offset,
-                              missing_faces)
-    report = report.replace(filled_vertices=int(np.count_nonzero(missing)))
+    filled = fill_from_mirror(result.points, faces, missing.vertices, report.plane.normal, report.plane.offset,
+                              missing.faces)
+    report = report.replace(filled_vertices=int(np.count_nonzero(missing.vertices)))
     if frame == "canonical":
         transform = report.canonical_from_input
         report = report.replace(output_frame="canonical", plane=MirrorPlane(np.array([1.0, 0.0, 0.0]), 0.0))
@@ -65,5 +65,4 @@ def solve_problem(problem: Problem, progress=None) -> SymmetrizationResult:
                                             problem.excluded, progress, problem.auto_config)
     if problem.missing is None:
         return result
-    return _filled(result, problem.points, problem.faces, problem.missing, problem.missing_faces,
-                   problem.options["output_frame"])
+    return _filled(result, problem.points, problem.faces, problem.missing, problem.options["output_frame"])
