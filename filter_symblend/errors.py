@@ -42,6 +42,15 @@ class DegenerateNeighbourhoodError(GeometryError):
         self.pair_ids = list(pair_ids)
 
 
+class DisconnectedPairsError(GeometryError):
+    """The pairs fall apart into groups at the width given; ``connecting_width`` (in the width's unit, the
+    landmark spacing) is the least that connects them."""
+
+    def __init__(self, message: str, connecting_width: float):
+        super().__init__(message)
+        self.connecting_width = connecting_width
+
+
 class SymmetryNotFoundError(GeometryError):
     """Automatic pairs found no mirror symmetry to restore (the shape is not mirror-symmetric)."""
 

@@ -219,6 +219,30 @@ def test_flat_neighbourhoods_of_automatic_pairs_widen_theta(blob):
         symmetrize(bent, pairs, twin[pairs], mode="affine", theta_width=0.5)
 
 
+def test_pieces_far_apart_are_connected_by_a_raised_phi_width():
+    """Two mirror-symmetric pieces twelve diameters apart: the automatic pairs of each fall apart into two
+    groups at the default phi_width, which is raised to the width that connects them and said in the report;
+    with the user's own landmarks it is an error naming that width."""
+    from filter_symblend.parameters import DEFAULTS
+
+    points, faces = synthetic.icosphere(3)
+    points = synthetic.bumpy(points)
+    partner = synthetic.mirror_partners(points)[1]
+    pieces = np.vstack([points, points + [0.0, 0.0, 12.0]])
+    partners = np.concatenate([partner, partner + len(points)])
+    bent = synthetic.bend(pieces, 0.3)
+    result = symmetrize(bent, faces=np.vstack([faces, faces + len(points)]), pairs="auto", mode="affine")
+    raised = [entry.raised_widths["phi_width"] for entry in result.report.auto_pairs.rounds
+              if "phi_width" in entry.raised_widths]
+    assert raised and min(raised) > 5 * DEFAULTS["phi_width"]  # measured 47.6 and 55.3 spacings
+    left = np.flatnonzero(pieces[:, 0] > 0.05)
+    assert synthetic.symmetry_error(result.points, left, partners[left]) < synthetic.symmetry_error(bent, left, partners[left])
+    pairs = left[::40]
+    with pytest.raises(GeometryError, match=rf"fall apart into 2 groups at `phi_width` = {DEFAULTS['phi_width']:g}: "
+                                            r".* Set `phi_width` to [0-9.]+ or more"):
+        symmetrize(bent, pairs, partners[pairs], mode="affine")
+
+
 def test_a_point_cloud_without_faces_is_paired_by_its_points(blob):
     points, _ = blob
     posed = synthetic.random_rigid(points, 5)

@@ -21,14 +21,13 @@ import time
 import warnings
 
 import numpy as np
-from scipy.sparse.csgraph import connected_components
 
 from ..core.geometry import MirrorPlane, reflection_across_plane
 from ..core.landmark_asymmetry import fit_mirror_plane
 from ..core.landmark_pairs import LandmarkPairs, check_landmarks
-from ..core.neighbourhoods import connecting_width, mean_nearest_spacing, pair_weights
 from ..core.solve import SymmetrizationResult, scaled_progress, solve
-from ..errors import DegenerateNeighbourhoodError, GeometryError, SymblendWarning, SymmetryNotFoundError
+from ..errors import (DegenerateNeighbourhoodError, DisconnectedPairsError, GeometryError, SymblendWarning,
+                      SymmetryNotFoundError)
 from ..parameters import CORE, options_of
 from .confidence import doubtful_map_warning, mirror_pairs
 from .config import DEFAULT, AutoConfig
@@ -41,17 +40,25 @@ from .report import AutomaticPairsReport, Round
 from .surface import Outline, Surface, build_surface
 
 
-def _connected_options(points: np.ndarray, landmarks: LandmarkPairs, options: dict) -> dict:
-    """``options`` with `phi_width` raised, if needed, so that the pairs' weight graph is connected (the
-    pieces of a mesh in several parts lie farther apart than the pairs on each)."""
-    left = np.concatenate([points[landmarks.left], points[landmarks.midline]])
-    right = np.concatenate([points[landmarks.right], points[landmarks.midline]])
-    spacing = options["width_spacing"] or mean_nearest_spacing(np.vstack([points[landmarks.left], points[landmarks.right],
-                                                                          points[landmarks.midline]]))
-    weights = pair_weights(left, right, options["phi_width"] * spacing)
-    if connected_components(weights, directed=False)[0] == 1:
-        return options
-    return {**options, "phi_width": max(options["phi_width"], connecting_width(left, right) / spacing)}
+def _solve_widening(points: np.ndarray, landmarks: LandmarkPairs, options: dict, progress,
+                    widenings: int) -> tuple[SymmetrizationResult, dict]:
+    """The solve of checked automatic ``landmarks`` on ``points`` with the widths they need, and the
+    ``options`` it used: `phi_width` raised to connect the pairs where they fall apart into groups (the
+    pieces of a mesh in several parts lie farther apart than the pairs on each), `theta_width` doubled, up to
+    ``widenings`` times, where the neighbourhoods are flat."""
+    widened = 0
+    while True:
+        try:
+            return solve(points, landmarks, options, progress, warn=False), options
+        except DisconnectedPairsError as error:
+            if error.connecting_width <= options["phi_width"]:
+                raise
+            options = {**options, "phi_width": error.connecting_width}
+        except DegenerateNeighbourhoodError:
+            if widened == widenings:
+                raise
+            widened += 1
+            options = {**options, "theta_width": 2.0 * options["theta_width"]}
 
 
 def _output_map(surface: Surface, result: SymmetrizationResult, sample: np.ndarray, config: AutoConfig) -> MirrorMap:
@@ -101,7 +108,7 @@ def _intrinsic_first_output(points, surface, core, scored, config, refusal, prog
     def solve_pairs(left, right):
         ones = np.ones(len(left))
         checked = check_landmarks(points, left, right, np.arange(1, len(left) + 1), None, ones, ones)
-        return solve(points, checked, _connected_options(points, checked, core), warn=False)
+        return _solve_widening(points, checked, core, None, 0)[0]
 
     result, tried = intrinsic_start(surface, config, solve_pairs, lambda out: surface_asymmetry(surface, out, scored))
     if result is None:
@@ -172,15 +179,8 @@ def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: d
         pairs = find_pairs(mirror, sample, pairs_wanted, constraints, exact_twins)
         exact_twins = pairs.search.twins_are == "exact vertices"
         solved, checked = as_landmarks(points, pairs, landmarks, options["landmark_priority"], config.coincident)
-        solve_options = _connected_options(solved, checked, core)
-        for widening in range(config.widenings + 1):
-            try:
-                candidate = solve(solved, checked, solve_options, scaled_progress(progress, start, step), warn=False)
-                break
-            except DegenerateNeighbourhoodError:
-                if widening == config.widenings:
-                    raise
-                solve_options = {**solve_options, "theta_width": 2.0 * solve_options["theta_width"]}
+        candidate, solve_options = _solve_widening(solved, checked, core, scaled_progress(progress, start, step),
+                                                   config.widenings)
         candidate = dataclasses.replace(candidate, points=candidate.points[:n], asymmetry=candidate.asymmetry[:n])
         entry = Round(surface_asymmetry(surface, candidate, scored), search=pairs.search,
                       pairs=int(len(checked.left) - (0 if landmarks is None else len(landmarks.left))),

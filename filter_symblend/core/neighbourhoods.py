@@ -15,7 +15,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
-from ..errors import GeometryError, id_list
+from ..errors import DisconnectedPairsError, id_list
 
 TRUNCATION = 3.0
 
@@ -72,7 +72,7 @@ def require_connected(
     parameter: str,
     multiple: float,
 ) -> None:
-    """Raise GeometryError naming the isolated pairs and the width that would connect them.
+    """Raise DisconnectedPairsError naming the isolated pairs and the width that would connect them.
 
     ``multiple`` is the width as given (a multiple of ``spacing``), for the message.
     """
@@ -82,14 +82,13 @@ def require_connected(
     main = np.argmax(np.bincount(labels))
     isolated = pair_ids[labels != main]
     needed = connecting_width(left, right) / spacing
-    raise GeometryError(
+    raise DisconnectedPairsError(
         f"The landmark pairs fall apart into {count} groups at `{parameter}` = "
         f"{multiple:g}: pairs {id_list(isolated)} are not connected to the other "
         f"{int(np.sum(labels == main))}. Set `{parameter}` to {needed:.3g} or more, "
         f"or place pairs between the groups. A pair whose two landmarks are not near its "
         f"neighbours' landmarks on both sides (e.g. joined to the wrong vertex) is isolated "
-        f"too: check it."
-    )
+        f"too: check it.", needed)
 
 
 def connecting_width(left: np.ndarray, right: np.ndarray) -> float:
