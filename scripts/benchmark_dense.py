@@ -25,7 +25,7 @@ from scipy.interpolate import RBFInterpolator
 
 import filter_symblend  # noqa: F401  (binds the filter)
 from filter_symblend import SymblendWarning, symmetrize
-from filter_symblend.core import splines, warp
+from filter_symblend.core.warp import choice, splines
 from filter_symblend.testing import synthetic
 
 SHARED = pathlib.Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -92,7 +92,7 @@ def main(argv=None) -> None:
             others = np.setdiff1d(np.arange(len(points)), landmarks)
             values = result.points[landmarks] - deformed[landmarks]
             start = time.perf_counter()
-            spline = splines.thin_plate_spline(deformed[landmarks], values)
+            spline = choice.thin_plate_spline(deformed[landmarks], values)
             fitted = time.perf_counter()
             moved = spline(deformed[others])
             evaluated = time.perf_counter()
@@ -105,7 +105,7 @@ def main(argv=None) -> None:
             rbf = f"{time.perf_counter() - start_rbf:.2f}"
         deviation = ""
         if args.accuracy:
-            dense = warp.ThinPlateSpline(deformed[landmarks], values)(deformed[others])
+            dense = splines.ThinPlateSpline(deformed[landmarks], values)(deformed[others])
             deviation = f"{np.abs(moved - dense).max() / diagonal:.1e}"
         seconds = result.report.seconds.to_dict()
         print(f"| {len(left):,} | {seconds['neighbourhoods']:.2f} | {seconds['local_transforms']:.3f} | "

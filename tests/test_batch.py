@@ -174,7 +174,7 @@ def test_more_batch_errors(tmp_path, study, capsys, monkeypatch):
 def _lock(outdir: pathlib.Path, pid: int) -> pathlib.Path:
     import json
     import socket
-    from filter_symblend.commands.folder_lock import LOCK_NAME
+    from filter_symblend.commands.shared.folder_lock import LOCK_NAME
     lock = outdir / LOCK_NAME
     lock.write_text(json.dumps({"pid": pid, "host": socket.gethostname(), "since": "2026-12-05 10:00:00"}))
     return lock

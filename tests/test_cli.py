@@ -144,7 +144,7 @@ def test_the_landmark_file_alone_gives_the_pairs_whatever_attributes_the_mesh_fi
     """The command hands the file's pairs to the filter as pairs, not through the mesh's attributes: a mesh
     file that carries a stale weight attribute (0 at two landmarks, as an earlier run with ``--missing``
     leaves it) changes nothing, and the output carries the file's pairs alone."""
-    from filter_symblend.commands.mesh_io import save_mesh
+    from filter_symblend.commands.shared.mesh_io import save_mesh
     from filter_symblend.meshlab.ply_attributes import load_mesh_with_attributes
 
     mesh_path, landmark_path, deformed, left, right = bent_cow_files
@@ -349,7 +349,7 @@ def test_every_mesh_format_listed_is_one_pymeshlab_writes(tmp_path):
     # In a fresh interpreter: a writer's failure then names its format, whatever earlier tests left in
     # this process (a crash inside pymeshlab's writers was seen once in ~10 runs of the whole suite,
     # never in 3,000 writes from a fresh process).
-    from filter_symblend.commands.mesh_io import MESH_SAVE_FORMATS
+    from filter_symblend.commands.shared.mesh_io import MESH_SAVE_FORMATS
     code = ("import sys, pymeshlab; ms = pymeshlab.MeshSet(); ms.create_sphere(subdiv=1)\n"
             "for extension in sys.argv[2:]:\n"
             "    print(extension, flush=True); ms.save_current_mesh(f'{sys.argv[1]}/sphere.{extension}')\n")
@@ -649,7 +649,7 @@ def test_a_tps_study_with_three_pairs_and_midline_landmarks(tmp_path, cow, capsy
 
 
 def test_an_unwritable_output_folder_is_refused_first(tmp_path, bent_cow_files, capsys, monkeypatch):
-    import filter_symblend.commands.mesh_io as command_files
+    import filter_symblend.commands.shared.mesh_io as command_files
     mesh_path, landmark_path, *_ = bent_cow_files
     monkeypatch.setattr(command_files.os, "access", lambda path, mode: False)  # as a user without rights sees it
     assert main(["symmetrize", str(mesh_path), "-l", str(landmark_path), "-o", str(tmp_path / "out.ply")]) == 1
@@ -670,7 +670,7 @@ def test_a_loaded_mesh_with_non_finite_coordinates_is_refused(tmp_path):
     """pymeshlab's readers drop such vertices (the header count then catches it); whatever reader keeps
     one, the check names it."""
     from filter_symblend import SymblendError
-    from filter_symblend.commands.mesh_io import check_loaded_mesh
+    from filter_symblend.commands.shared.mesh_io import check_loaded_mesh
     points = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, np.inf, 0.0]])
     with pytest.raises(SymblendError, match=r"scan.stl: vertex 2 has non-finite coordinates \(1 such vertices\); "
                                             r"repair the mesh"):

@@ -106,7 +106,7 @@ def test_too_little_free_space_is_refused_before_any_work(sphere_file, tmp_path,
     """The outputs need room for the mesh (up to 4x its input file) and the report; a folder with less is refused
     before anything is computed or written, naming the folder, what is free and what is needed."""
     import collections
-    from filter_symblend.commands import mesh_io
+    from filter_symblend.commands.shared import mesh_io
     usage = collections.namedtuple("usage", "total used free")
     needed = 4 * sphere_file.stat().st_size + 2**20  # the mesh and the report
     output, report = tmp_path / "out.ply", tmp_path / "out.json"

@@ -252,14 +252,14 @@ def test_a_weight_zero_side_takes_the_mirror_shape_of_the_other(cow):
 
 
 def test_the_approximate_warp_keeps_the_pairs_exactly_symmetric_and_the_shape(cow, monkeypatch):
-    from filter_symblend.core import splines, warp
+    from filter_symblend.core.warp import choice, splines
 
     left, right = cow.landmarks(150)
     deformed = synthetic.figure_1_deformation(cow.points)
     exact = quiet_symmetrize(deformed, left, right, mode="affine")
-    monkeypatch.setattr(splines, "EXACT_CENTRES", 200)
-    monkeypatch.setattr(splines, "ITERATIVE_CENTRES", 200)
-    monkeypatch.setattr(warp, "SUBSET_CENTRES", 100)
+    monkeypatch.setattr(choice, "EXACT_CENTRES", 200)
+    monkeypatch.setattr(choice, "ITERATIVE_CENTRES", 200)
+    monkeypatch.setattr(splines, "SUBSET_CENTRES", 100)
     approximate = quiet_symmetrize(deformed, left, right, mode="affine")
     assert "through 100 of the 300 landmarks plus local splines of its residual" in approximate.report.warp
     assert approximate.report.landmark_asymmetry_after.max_relative < 1e-9

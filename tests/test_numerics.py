@@ -6,7 +6,7 @@ import scipy.sparse as sp
 from scipy.interpolate import RBFInterpolator
 from scipy.sparse.csgraph import connected_components
 
-from filter_symblend.core import iterative_warp, splines, warp
+from filter_symblend.core.warp import choice, iterative, splines
 from filter_symblend.core.geometry import MIRROR_X, minimal_rotation, rotation_about_axis
 from filter_symblend.core.global_solve import MINUS_X, global_solve
 from filter_symblend.core.local_symmetries import local_symmetries
@@ -186,23 +186,23 @@ def test_global_solve_reproduces_a_globally_affine_input_exactly():
 @pytest.mark.parametrize("kind", ["exact", "iterative", "approximate"])
 def test_thin_plate_spline_is_exact_at_landmarks_and_reproduces_affine_maps(monkeypatch, kind):
     if kind != "exact":
-        monkeypatch.setattr(splines, "EXACT_CENTRES", 50)
-        monkeypatch.setattr(splines, "ITERATIVE_CENTRES", 50 if kind == "approximate" else 10_000)
-        monkeypatch.setattr(warp, "SUBSET_CENTRES", 40)
-        monkeypatch.setattr(iterative_warp, "COARSE_CENTRES", 40)
-        monkeypatch.setattr(iterative_warp, "CENTRES_PER_PATCH", 20)
+        monkeypatch.setattr(choice, "EXACT_CENTRES", 50)
+        monkeypatch.setattr(choice, "ITERATIVE_CENTRES", 50 if kind == "approximate" else 10_000)
+        monkeypatch.setattr(splines, "SUBSET_CENTRES", 40)
+        monkeypatch.setattr(iterative, "COARSE_CENTRES", 40)
+        monkeypatch.setattr(iterative, "CENTRES_PER_PATCH", 20)
     rng = np.random.default_rng(1)
     source = rng.normal(size=(200, 3))
     displacement = 0.1 * rng.normal(size=source.shape)
-    spline = splines.thin_plate_spline(source, displacement)
-    assert isinstance(spline, warp.ApproximateThinPlateSpline) == (kind == "approximate")
+    spline = choice.thin_plate_spline(source, displacement)
+    assert isinstance(spline, splines.ApproximateThinPlateSpline) == (kind == "approximate")
     assert ("solved iteratively" in spline.description) == (kind == "iterative")
     scale = np.ptp(source, axis=0).max()
     np.testing.assert_allclose(spline(source), displacement, atol=1e-10 if kind != "iterative" else
-                               iterative_warp.TOLERANCE * scale)
+                               iterative.TOLERANCE * scale)
     a = np.eye(3) + 0.2 * rng.normal(size=(3, 3))
     points = rng.normal(size=(500, 3))
-    affine = splines.thin_plate_spline(source, source @ a.T + 1.5 - source)
+    affine = choice.thin_plate_spline(source, source @ a.T + 1.5 - source)
     np.testing.assert_allclose(points + affine(points), points @ a.T + 1.5, atol=1e-10)
 
 
@@ -215,7 +215,7 @@ def test_the_hand_written_spline_equals_scipys_rbf_interpolator():
     points = np.vstack([1000.0 + 60.0 * rng.normal(size=(3000, 3)), centres[:5] + 1e-9, centres[5:10]])
     expected = RBFInterpolator(centres, values, kernel="linear", degree=1)(points)
     progress = []
-    ours = warp.ThinPlateSpline(centres, values)(points, progress.append)
+    ours = splines.ThinPlateSpline(centres, values)(points, progress.append)
     np.testing.assert_allclose(ours, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
     assert progress[-1] == 1.0 and all(b - a >= 0.05 for a, b in zip(progress, progress[1:-1]))
 
@@ -224,9 +224,9 @@ def test_the_approximate_spline_stays_close_to_the_exact_one_on_a_smooth_map(mon
     """Many landmarks of a smooth deformation: the approximation (exact spline through a
     farthest-point subset plus local splines of the residual on patches) is exact at every landmark and within
     0.1 % of the displacement of the exact spline everywhere."""
-    monkeypatch.setattr(splines, "EXACT_CENTRES", 500)
-    monkeypatch.setattr(splines, "ITERATIVE_CENTRES", 500)
-    monkeypatch.setattr(warp, "SUBSET_CENTRES", 300)
+    monkeypatch.setattr(choice, "EXACT_CENTRES", 500)
+    monkeypatch.setattr(choice, "ITERATIVE_CENTRES", 500)
+    monkeypatch.setattr(splines, "SUBSET_CENTRES", 300)
     rng = np.random.default_rng(3)
     centres = rng.uniform(-1, 1, size=(1200, 3))
     centres /= np.linalg.norm(centres, axis=1, keepdims=True)  # on the unit sphere, like a surface
@@ -234,8 +234,8 @@ def test_the_approximate_spline_stays_close_to_the_exact_one_on_a_smooth_map(mon
         return np.column_stack([0.3 * np.sin(2 * x[:, 1]), 0.2 * x[:, 0] * x[:, 2], 0.1 * np.cos(3 * x[:, 0])])
     points = rng.normal(size=(4000, 3))
     points /= np.linalg.norm(points, axis=1, keepdims=True)
-    approximate = splines.thin_plate_spline(centres, bend(centres))
-    exact = warp.ThinPlateSpline(centres, bend(centres))(points)
+    approximate = choice.thin_plate_spline(centres, bend(centres))
+    exact = splines.ThinPlateSpline(centres, bend(centres))(points)
     assert approximate.description.startswith("thin-plate spline through 300 of the 1200 landmarks")
     np.testing.assert_allclose(approximate(centres), bend(centres), atol=1e-10)
     assert np.abs(approximate(points) - exact).max() < 1e-3 * np.abs(exact).max()  # measured 2.8e-5
@@ -279,11 +279,11 @@ def test_a_solve_that_does_not_converge_says_so(monkeypatch):
 def _iterative_against_dense(monkeypatch, centres, values, points):
     """(iterative spline, largest |iterative - dense| at ``points`` relative to the landmarks' extent), with a
     coarse level much smaller than the landmarks so that the refinement has work to do."""
-    monkeypatch.setattr(iterative_warp, "COARSE_CENTRES", len(centres) // 8)
-    monkeypatch.setattr(iterative_warp, "CENTRES_PER_PATCH", 50)
-    iterative = iterative_warp.iterative_thin_plate_spline(centres, values)
-    dense = warp.ThinPlateSpline(centres, values)
-    return iterative, np.abs(iterative(points) - dense(points)).max() / np.ptp(centres, axis=0).max()
+    monkeypatch.setattr(iterative, "COARSE_CENTRES", len(centres) // 8)
+    monkeypatch.setattr(iterative, "CENTRES_PER_PATCH", 50)
+    refined = iterative.iterative_thin_plate_spline(centres, values)
+    dense = splines.ThinPlateSpline(centres, values)
+    return refined, np.abs(refined(points) - dense(points)).max() / np.ptp(centres, axis=0).max()
 
 
 @pytest.mark.parametrize("roughness", [0.0, 1.0])
@@ -296,11 +296,11 @@ def test_the_iterative_spline_is_the_dense_one(monkeypatch, roughness):
     values = np.column_stack([0.3 * np.sin(2 * centres[:, 1]), 0.2 * centres[:, 0] * centres[:, 2],
                               0.1 * np.cos(3 * centres[:, 0])]) + roughness * 0.1 * rng.normal(size=centres.shape)
     points = 1.2 * rng.uniform(-1, 1, size=(3000, 3))
-    iterative, deviation = _iterative_against_dense(monkeypatch, centres, values, points)
-    assert iterative.residual <= iterative_warp.TOLERANCE
-    assert deviation < 10 * iterative_warp.TOLERANCE
-    assert 1 < iterative.steps < iterative_warp.MAX_STEPS
-    assert f"({iterative.steps} steps, largest residual" in iterative.description
+    refined, deviation = _iterative_against_dense(monkeypatch, centres, values, points)
+    assert refined.residual <= iterative.TOLERANCE
+    assert deviation < 10 * iterative.TOLERANCE
+    assert 1 < refined.steps < iterative.MAX_STEPS
+    assert f"({refined.steps} steps, largest residual" in refined.description
 
 
 def test_the_iterative_spline_handles_flat_patches(monkeypatch):
@@ -310,36 +310,36 @@ def test_the_iterative_spline_handles_flat_patches(monkeypatch):
     axis = rng.integers(0, 3, size=len(centres))
     centres[np.arange(len(centres)), axis] = rng.choice([-1.0, 1.0], size=len(centres))
     values = np.column_stack([np.sin(centres[:, 1]), centres[:, 0] * centres[:, 2], np.cos(centres[:, 0])])
-    iterative, deviation = _iterative_against_dense(monkeypatch, centres, values, rng.uniform(-1, 1, size=(2000, 3)))
-    assert iterative.residual <= iterative_warp.TOLERANCE and deviation < 10 * iterative_warp.TOLERANCE
+    refined, deviation = _iterative_against_dense(monkeypatch, centres, values, rng.uniform(-1, 1, size=(2000, 3)))
+    assert refined.residual <= iterative.TOLERANCE and deviation < 10 * iterative.TOLERANCE
 
 
 def test_a_refinement_stopped_short_says_so(monkeypatch):
-    monkeypatch.setattr(iterative_warp, "MAX_STEPS", 1)
+    monkeypatch.setattr(iterative, "MAX_STEPS", 1)
     rng = np.random.default_rng(9)
     centres = rng.normal(size=(800, 3))
     values = 0.1 * rng.normal(size=centres.shape)
-    monkeypatch.setattr(iterative_warp, "COARSE_CENTRES", 50)
+    monkeypatch.setattr(iterative, "COARSE_CENTRES", 50)
     with pytest.warns(SymblendWarning, match=r"warp's iterative solve stopped after 1 step at a residual of "
                                              r"[0-9.e+-]+ of the landmarks' extent"):
-        iterative_warp.iterative_thin_plate_spline(centres, values)
+        iterative.iterative_thin_plate_spline(centres, values)
 
 
 def test_the_approximate_spline_handles_flat_patches(monkeypatch):
     """Landmarks on the faces of a cube: every correction patch inside a face is planar, where a
     local spline with an affine part would be singular; the constant part keeps it solvable."""
-    monkeypatch.setattr(splines, "EXACT_CENTRES", 500)
-    monkeypatch.setattr(splines, "ITERATIVE_CENTRES", 500)
-    monkeypatch.setattr(warp, "SUBSET_CENTRES", 200)
+    monkeypatch.setattr(choice, "EXACT_CENTRES", 500)
+    monkeypatch.setattr(choice, "ITERATIVE_CENTRES", 500)
+    monkeypatch.setattr(splines, "SUBSET_CENTRES", 200)
     rng = np.random.default_rng(5)
     centres = rng.uniform(-1, 1, size=(1500, 3))
     axis = rng.integers(0, 3, size=len(centres))
     centres[np.arange(len(centres)), axis] = rng.choice([-1.0, 1.0], size=len(centres))  # onto a face
     values = np.column_stack([np.sin(centres[:, 1]), centres[:, 0] * centres[:, 2], np.cos(centres[:, 0])])
-    approximate = splines.thin_plate_spline(centres, values)
+    approximate = choice.thin_plate_spline(centres, values)
     np.testing.assert_allclose(approximate(centres), values, atol=1e-9)
     points = rng.uniform(-1, 1, size=(2000, 3))
-    exact = warp.ThinPlateSpline(centres, values)(points)
+    exact = splines.ThinPlateSpline(centres, values)(points)
     assert np.isfinite(approximate(points)).all()
     assert np.abs(approximate(points) - exact).max() < 0.03 * np.abs(exact).max()  # measured 0.013 (inside the cube)
 
@@ -366,6 +366,6 @@ def test_the_spline_at_its_own_centres_equals_the_direct_sum(count):
     centres = rng.normal(size=(count, 3))
     centres[1] = centres[0] + 1e-9
     weights, polynomial = rng.normal(size=(count, 3)), rng.normal(size=(4, 3))
-    spline = warp.ThinPlateSpline.from_coefficients(centres, np.zeros(3), 1.0, weights, polynomial, "")
+    spline = splines.ThinPlateSpline.from_coefficients(centres, np.zeros(3), 1.0, weights, polynomial, "")
     direct = np.column_stack([np.ones(count), centres]) @ polynomial - cdist(centres, centres) @ weights
     np.testing.assert_allclose(spline.at_centres(), direct, rtol=0, atol=1e-12 * np.abs(direct).max())

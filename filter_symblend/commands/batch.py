@@ -26,11 +26,11 @@ from threadpoolctl import threadpool_limits
 from ..atomic import write_text
 from ..errors import SymblendError
 from ..landmarks.formats import Landmark, LandmarkSet, write_tps_study
-from .console import one_line, terminal_progress
-from .folder_lock import folder_lock
-from .manifest import OUTPUT_OPTIONS, Row, read_manifest
-from .mesh_io import load_mesh
-from .options import add_filter_options, add_landmark_options, add_missing_option, symmetrize_arguments
+from .shared.console import one_line, terminal_progress
+from .shared.folder_lock import folder_lock
+from .shared.manifest import OUTPUT_OPTIONS, Row, read_manifest
+from .shared.mesh_io import load_mesh
+from .shared.options import add_filter_options, add_landmark_options, add_missing_option, symmetrize_arguments
 from .symmetrize import landmark_name, symmetrize_files
 
 ASYMMETRY_FIELDS = ("landmark_asymmetry_before", "landmark_asymmetry_after", "mirror_asymmetry_before",

@@ -9,9 +9,9 @@ from ..core.landmark_pairs import check_pairs
 from ..errors import SymblendError
 from ..landmarks.formats import read_landmarks, write_landmarks
 from ..landmarks.from_file import AmbiguousPairingError
-from .landmark_input import geometric_pairing_note, snapped_pairs, write_pair_table_for
-from .mesh_io import check_outputs, load_mesh
-from .options import add_landmark_options, add_specimen_option
+from .shared.landmark_input import geometric_pairing_note, snapped_pairs, write_pair_table_for
+from .shared.mesh_io import check_outputs, load_mesh
+from .shared.options import add_landmark_options, add_specimen_option
 
 
 def register(commands) -> None:

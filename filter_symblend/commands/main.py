@@ -10,7 +10,7 @@ import warnings
 
 from ..errors import SymblendError, SymblendWarning
 from . import batch, landmark_files, mirror_pairs, mlx, report, symmetrize
-from .console import Parser, one_line, show_warning
+from .shared.console import Parser, one_line, show_warning
 
 DESCRIPTION = ("The symblend command: symmetrize a mesh from a landmark file or a whole study, run filter scripts, "
                "compare before and after, check and convert landmarks, write automatic pairs to check.")

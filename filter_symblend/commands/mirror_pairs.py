@@ -11,10 +11,10 @@ from ..core.mirror_pairs import pairs_to_check
 from ..errors import SymblendError
 from ..landmarks.formats import Landmark, LandmarkSet, write_landmarks
 from ..parameters import ARRAYS, PARAMETERS, options_of
-from .console import progress_display
-from .landmark_input import snapped_pairs
-from .mesh_io import check_outputs, load_mesh
-from .options import add_filter_options, add_landmark_options
+from .shared.console import progress_display
+from .shared.landmark_input import snapped_pairs
+from .shared.mesh_io import check_outputs, load_mesh
+from .shared.options import add_filter_options, add_landmark_options
 
 DEFAULT_COUNT = 20  # pairs a person checks by eye in a few minutes
 WRITABLE = (".pp", ".fcsv", ".mrk.json", ".csv")  # formats that `symmetrize -l` reads back with their names

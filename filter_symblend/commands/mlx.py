@@ -11,10 +11,10 @@ from ..errors import SymblendError, SymblendWarning
 from ..meshlab.filter_script import read_filter_script, symblend_options
 from ..meshlab.script_runner import apply_filter_script
 from ..parameters import DEFAULTS
-from .console import progress_display
-from .landmark_input import write_landmarks
-from .mesh_io import check_outputs, load_mesh, save_with_report
-from .options import add_landmark_options, add_missing_option
+from .shared.console import progress_display
+from .shared.landmark_input import write_landmarks
+from .shared.mesh_io import check_outputs, load_mesh, save_with_report
+from .shared.options import add_landmark_options, add_missing_option
 
 
 def register(commands) -> None:

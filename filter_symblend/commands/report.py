@@ -15,7 +15,7 @@ from ..measures.verdict import result_warnings
 from ..meshlab.attributes import optional_attribute
 from ..meshlab.layer_checks import compare_layers
 from ..meshlab.meshset_filter import UNCERTAINTY_ATTRIBUTE
-from .mesh_io import check_outputs, load_mesh, report_json, save_quality_ply
+from .shared.mesh_io import check_outputs, load_mesh, report_json, save_quality_ply
 
 
 def register(commands) -> None:

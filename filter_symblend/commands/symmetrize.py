@@ -12,10 +12,10 @@ from ..core.report import UncertaintySummary
 from ..errors import SymblendError
 from ..meshlab.meshset_filter import FilterRun, run_filter
 from ..parameters import PARAMETERS
-from .console import progress_display
-from .landmark_input import read_landmarks
-from .mesh_io import check_outputs, load_mesh, save_with_report
-from .options import add_symmetrize_arguments
+from .shared.console import progress_display
+from .shared.landmark_input import read_landmarks
+from .shared.mesh_io import check_outputs, load_mesh, save_with_report
+from .shared.options import add_symmetrize_arguments
 
 
 POINTS_ONLY = (".xyz",)  # mesh formats pymeshlab writes without faces

@@ -19,7 +19,7 @@ from .local_symmetries import LocalSymmetries, local_symmetries
 from .mirror_pairs import MirrorPairs
 from .neighbourhoods import mean_nearest_spacing, pair_weights, require_connected, scaled_weights
 from .report import LocalFit, Report, Spread, Timings, Widths
-from .splines import thin_plate_spline
+from .warp import thin_plate_spline
 
 # A pair's own mirror misfit, in neighbourhood radii, above which it is reported.
 # Measured on the cow and spot: sound pairs stay below 1.2 under bends, compression

@@ -27,7 +27,7 @@ from .geometry import rigid_fit
 from .landmark_pairs import LandmarkPairs, midline_labels
 from .report import UncertaintySummary
 from .solve import LandmarkTargets, landmark_targets
-from .splines import thin_plate_spline
+from .warp import thin_plate_spline
 
 EVALUATED_VALUES = 2**24  # vertices x columns per evaluation of the changes (128 MB of float64)
 

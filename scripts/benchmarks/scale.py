@@ -9,7 +9,7 @@ import numpy as np
 import pymeshlab
 
 from filter_symblend import symmetrize
-from filter_symblend.core import splines, warp
+from filter_symblend.core.warp import choice, splines
 from filter_symblend.core.baseline import mirror_average
 from filter_symblend.core.global_solve import global_solve
 from filter_symblend.core.local_symmetries import local_symmetries
@@ -82,19 +82,19 @@ def approximation_against_exact(points, faces, count):
     """The approximate warp forced where the exact one can still be computed: how far apart they are."""
     [(_, left, right)] = scan_pairs(points, [count])
     deformed = synthetic.figure_1_deformation(points)
-    limits = splines.EXACT_CENTRES, splines.ITERATIVE_CENTRES
+    limits = choice.EXACT_CENTRES, choice.ITERATIVE_CENTRES
     try:
-        splines.EXACT_CENTRES = 2 * len(left)
+        choice.EXACT_CENTRES = 2 * len(left)
         exact = symmetrize(deformed, left, right, **SCAN_OPTIONS)
-        splines.EXACT_CENTRES = splines.ITERATIVE_CENTRES = 2 * len(left) - 1
+        choice.EXACT_CENTRES = choice.ITERATIVE_CENTRES = 2 * len(left) - 1
         approximate = symmetrize(deformed, left, right, **SCAN_OPTIONS)
     finally:
-        splines.EXACT_CENTRES, splines.ITERATIVE_CENTRES = limits
+        choice.EXACT_CENTRES, choice.ITERATIVE_CENTRES = limits
     edges = np.unique(np.sort(np.vstack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
     lengths = [np.linalg.norm(out[edges[:, 0]] - out[edges[:, 1]], axis=1) for out in (exact.points, approximate.points)]
     change = np.abs(lengths[1] - lengths[0]) / lengths[0]
     diagonal = exact.report.diagonal
-    print(f"\nApproximate warp ({warp.SUBSET_CENTRES:,} landmarks exact + local splines on patches) against the exact "
+    print(f"\nApproximate warp ({splines.SUBSET_CENTRES:,} landmarks exact + local splines on patches) against the exact "
           f"spline, {len(points):,} vertices, {len(left):,} pairs ({2 * len(left):,} landmarks), as above")
     print("| warp s exact | warp s approximate | max distance / diagonal | edge length change: worst | 99.9 % | median |")
     print("|---|---|---|---|---|---|")

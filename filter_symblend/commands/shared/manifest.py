@@ -9,8 +9,8 @@ import dataclasses
 import os
 import pathlib
 
-from ..errors import SymblendError
-from ..landmarks.text_files import csv_records, read_text
+from ...errors import SymblendError
+from ...landmarks.text_files import csv_records, read_text
 from .options import add_symmetrize_arguments
 
 PATH_COLUMNS = ("mesh", "landmarks", "pair_table")

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..errors import SymblendError
+from ...errors import SymblendError
 
 
 def one_line(error: Exception | Warning | str) -> str:

@@ -13,10 +13,10 @@ from collections.abc import Iterator
 import numpy as np
 import pymeshlab
 
-from ..atomic import all_or_none
-from ..errors import SymblendError
-from ..meshlab.attributes import custom_attribute_names
-from ..meshlab.ply_attributes import load_mesh_with_attributes
+from ...atomic import all_or_none
+from ...errors import SymblendError
+from ...meshlab.attributes import custom_attribute_names
+from ...meshlab.ply_attributes import load_mesh_with_attributes
 from .console import one_line
 
 # Extensions pymeshlab writes (tests/test_cli.py saves a mesh in each).

@@ -8,11 +8,11 @@ import dataclasses
 import pathlib
 import sys
 
-from ..core.landmark_pairs import LandmarkPairs
-from ..errors import SymblendError
-from ..landmarks.from_file import pairs_from_landmark_file
-from ..landmarks.pairing import write_pair_table
-from ..meshlab.attributes import write_landmark_attributes
+from ...core.landmark_pairs import LandmarkPairs
+from ...errors import SymblendError
+from ...landmarks.from_file import pairs_from_landmark_file
+from ...landmarks.pairing import write_pair_table
+from ...meshlab.attributes import write_landmark_attributes
 
 
 def snapped_pairs(ms, args):

@@ -29,10 +29,10 @@ from scipy.linalg import lu_factor, lu_solve
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
-from ..errors import SymblendWarning
-from .mesh_quantities import farthest_point_order
-from .parallel import in_threads
-from .warp import ThinPlateSpline
+from ...errors import SymblendWarning
+from ..mesh_quantities import farthest_point_order
+from ..parallel import in_threads
+from .splines import ThinPlateSpline
 
 COARSE_CENTRES = 2_000  # landmarks of the preconditioner's coarse spline (its LU: 0.1 s)
 CENTRES_PER_PATCH = 100  # one local patch per this many landmarks

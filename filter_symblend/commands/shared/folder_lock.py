@@ -16,7 +16,7 @@ import socket
 import time
 from collections.abc import Iterator
 
-from ..errors import SymblendError
+from ...errors import SymblendError
 
 LOCK_NAME = ".symblend-batch.lock"
 POLL_SECONDS = 1.0

@@ -19,7 +19,7 @@ Expanding |x - c|^2 loses digits for x within NEAR (of the landmarks' extent) of
 a landmark, so those vertices are evaluated again from coordinate differences
 (scipy's cdist).
 
-Beyond the landmarks an iterative solve reaches (core/splines.py), the exact spline is out of
+Beyond the landmarks an iterative solve reaches (warp/choice.py), the exact spline is out of
 reach (its evaluation grows as k per vertex, each refinement step as k^2), so
 ``ApproximateThinPlateSpline`` takes over: the exact spline through SUBSET_CENTRES
 landmarks spread by farthest-point sampling, plus what it leaves at all the
@@ -39,8 +39,8 @@ from scipy.linalg import lu_factor, lu_solve
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
-from .mesh_quantities import farthest_point_order
-from .parallel import WORKERS, in_threads
+from ..mesh_quantities import farthest_point_order
+from ..parallel import WORKERS, in_threads
 
 BLOCK_ELEMENTS = 2**17  # distances per evaluation block (1 MB of float64; measured fastest of 2^15..2^22)
 CHUNK_ROWS = 2**14  # vertices per task of the thread pool (fewer when that leaves a core idle)

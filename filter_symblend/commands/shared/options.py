@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 import pathlib
 
-from ..parameters import PARAMETERS
+from ...parameters import PARAMETERS
 from .console import RaisingParser
 
 FRAMES = ("LPS", "RAS")
