@@ -162,7 +162,7 @@ def test_weighted_solve_with_midline_matches_dense_least_squares():
     wr[5], wl[8] = 0.0, 0.0
     phi = pair_weights(p, q, 1.0)
     local = local_symmetries("affine", pair_weights(p, q, 1.5), p, q, np.arange(1, 26))
-    r, s = global_solve(phi, p, q, local, alpha=0.05, left_weights=wl, right_weights=wr, on_plane=on_plane)
+    r, s = global_solve(phi, p, q, local, alpha=0.05, weights=(wl, wr), on_plane=on_plane)
     expected = dense_least_squares(phi, p, q, local, 0.05, wl, wr, on_plane)
     expected[:, 1:] -= expected[:, 1:].mean(axis=0)
     np.testing.assert_allclose(r, expected, atol=1e-10)

@@ -168,23 +168,21 @@ def global_solve(
     local: LocalSymmetries,
     alpha: float,
     *,
-    left_weights: np.ndarray | None = None,
-    right_weights: np.ndarray | None = None,
+    weights: tuple[np.ndarray, np.ndarray] | None = None,
     on_plane: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Symmetric output pairs (r, s), each (n, 3), with s = r mirrored across x = 0.
 
     phi (n, n): symmetric pair weights, diagonal included. left, right (n, 3):
     input pairs in a frame where the mean local normal is about -x. local:
-    Step 1 output in the same frame. alpha > 0. left_weights, right_weights
-    (n,) in [0, 1]: how much each landmark's input geometry counts (0: missing
-    or broken, that side becomes the mirror image of the other; default 1).
+    Step 1 output in the same frame. alpha > 0. weights: (left (n,), right (n,))
+    in [0, 1], how much each landmark's input geometry counts (0: missing or
+    broken, that side becomes the mirror image of the other; default all 1).
     on_plane (n,) bool: midline landmarks (left = right), held on x = 0.
     """
     n = len(left)
     phi = sp.csr_matrix(phi)
-    wl = np.ones(n) if left_weights is None else left_weights
-    wr = np.ones(n) if right_weights is None else right_weights
+    wl, wr = (np.ones(n), np.ones(n)) if weights is None else weights
     if np.all(wl == 1) and np.all(wr == 1):
         phi_left = phi_right = phi_gap = phi_gap_t = phi
     else:

@@ -155,7 +155,7 @@ def landmark_targets(points: np.ndarray, landmarks: LandmarkPairs, options: dict
     # the diagonal without this, 0.23% with it).
     frame = minimal_rotation(normalize(local.normals.mean(axis=0)), MINUS_X)[0]
     r, s = global_solve(phi, p0 @ frame.T, q0 @ frame.T, local.rotated(frame), options["alpha"],
-                        left_weights=wl, right_weights=wr, on_plane=on_plane)
+                        weights=(wl, wr), on_plane=on_plane)
     solved = np.vstack([r[:n], s[:n], r[n:]])
     if not np.isfinite(solved).all():
         raise GeometryError(
