@@ -25,10 +25,11 @@ Seconds are the filter's own stage timings (median of --repeat runs).
                                              # local workers, and a local Dask cluster
     python scripts/benchmark.py --uncertainty  # the jackknife: its cost through the MeshSet filter, its
                                              # calibration against known landmark noise, a misplaced landmark
+    python scripts/benchmark.py --icp        # the mirror plane's reflection ICP, plain and Anderson-accelerated
     python scripts/benchmark_dense.py        # dense pairs: the stages, the warp against the dense spline
 
 Each section is a module of scripts/benchmarks/ (accuracy, scale, automatic, corpus, whole_filter, batch,
-mirror_maps, uncertainty) on the
+mirror_maps, uncertainty, mirror_planes) on the
 package's own helpers; this script only parses the options and runs one.
 """
 
@@ -39,8 +40,8 @@ import warnings
 
 from filter_symblend import SymblendWarning
 
-from benchmarks import (accuracy, automatic, batch, corpus, mirror_maps, scale, uncertainty,  # scripts/ is on sys.path
-                        whole_filter)
+from benchmarks import (accuracy, automatic, batch, corpus, mirror_maps, mirror_planes, scale,  # scripts/ is on sys.path
+                        uncertainty, whole_filter)
 from benchmarks.common import MESHES
 
 
@@ -54,6 +55,7 @@ def main(argv=None) -> None:
     parser.add_argument("--corpus", action="store_true", help="automatic pairs over every corpus mesh")
     parser.add_argument("--filter", action="store_true", help="the MeshSet filter against its core; symblend report")
     parser.add_argument("--batch", action="store_true", help="symblend batch: 1 and 2 workers, a local Dask cluster")
+    parser.add_argument("--icp", action="store_true", help="the mirror plane's reflection ICP, plain and accelerated")
     parser.add_argument("--uncertainty", action="store_true", help="the jackknife: cost, calibration, detection")
     parser.add_argument("--mirror-maps", action="store_true",
                         help="the mirror map against the BCICP dataset's ground-truth self-symmetry")
@@ -87,6 +89,9 @@ def main(argv=None) -> None:
         return
     if args.batch:
         batch.batch_main()
+        return
+    if args.icp:
+        mirror_planes.icp_main()
         return
     if args.uncertainty:
         uncertainty.uncertainty_main(args)

@@ -6,12 +6,13 @@ import scipy.sparse as sp
 from scipy.interpolate import RBFInterpolator
 from scipy.sparse.csgraph import connected_components
 
-from filter_symblend.core.warp import choice, iterative, splines
 from filter_symblend.core.geometry import MIRROR_X, minimal_rotation, rotation_about_axis
 from filter_symblend.core.global_solve import MINUS_X, global_solve
 from filter_symblend.core.local_symmetries import local_symmetries
 from filter_symblend.core.neighbourhoods import pair_weights
+from filter_symblend.core.warp import choice, iterative, splines
 from filter_symblend.errors import SymblendWarning
+from filter_symblend.testing import synthetic
 
 MODES = ["standard", "affine", "articulated"]
 
@@ -369,3 +370,38 @@ def test_the_spline_at_its_own_centres_equals_the_direct_sum(count):
     spline = splines.ThinPlateSpline.from_coefficients(centres, np.zeros(3), 1.0, weights, polynomial, "")
     direct = np.column_stack([np.ones(count), centres]) @ polynomial - cdist(centres, centres) @ weights
     np.testing.assert_allclose(spline.at_centres(), direct, rtol=0, atol=1e-12 * np.abs(direct).max())
+
+
+def test_the_accelerated_mirror_plane_icp_reaches_the_converged_plane(cow, monkeypatch):
+    """Reflection ICP (core/mirror_planes) from a plane 10 degrees off: on the exactly symmetric cow in a random
+    pose it ends on the true plane; on the cow bent 1.0 rad (no plane mirrors it) it ends no worse than plain ICP
+    capped at 40 steps, nor than plain ICP run to 200 steps (0.1 % leeway; measured 0.0399 against 0.0456 and
+    0.0456: the plain steps settle in a worse plane from this start)."""
+    from scipy.spatial import cKDTree
+
+    from filter_symblend.core import mirror_planes
+    from filter_symblend.core.geometry import normalize
+    from filter_symblend.core.mesh_quantities import evenly
+
+    def tilted(normal):
+        axis = normalize(np.cross(normal, [0.3, 0.5, 0.8]))
+        return normal * np.cos(np.radians(10)) + np.cross(axis, normal) * np.sin(np.radians(10))
+
+    posed = synthetic.random_rigid(cow.points, seed=5)
+    rotation = np.linalg.lstsq(np.column_stack([cow.points, np.ones(len(posed))]), posed, rcond=None)[0][:3].T
+    true_normal = rotation @ [1.0, 0.0, 0.0]
+    true_offset = float(true_normal @ posed[cow.all_left[0]] + true_normal @ posed[cow.all_right[0]]) / 2
+    sample = evenly(posed, mirror_planes.ICP_SAMPLES)
+    normal, offset, _ = mirror_planes._refine_plane(sample, cKDTree(sample), tilted(true_normal), true_offset, None,
+                                                    1e-9)
+    assert abs(abs(normal @ true_normal) - 1) < 1e-10 and abs(abs(offset) - abs(true_offset)) < 1e-9 * cow.diagonal
+
+    bent = evenly(synthetic.bend(cow.points, 1.0), mirror_planes.ICP_SAMPLES)
+    start = tilted(np.array([1.0, 0.0, 0.0])), float(np.mean(bent[:, 0]))
+    accelerated = mirror_planes._refine_plane(bent, cKDTree(bent), *start, None, 1e-4)[2]
+    monkeypatch.setattr(mirror_planes, "ANDERSON_MEMORY", 1)  # plain ICP
+    capped = mirror_planes._refine_plane(bent, cKDTree(bent), *start, None, 1e-4)[2]
+    monkeypatch.setattr(mirror_planes, "ICP_ITERATIONS", 200)
+    converged = mirror_planes._refine_plane(bent, cKDTree(bent), *start, None, 1e-6)[2]
+    print("trimmed RMS: accelerated", accelerated, "plain 40 steps", capped, "plain 200 steps", converged)
+    assert accelerated <= converged * 1.001 and accelerated <= capped * (1 + 1e-6)

@@ -14,6 +14,7 @@ from .mesh_quantities import evenly
 
 ICP_SAMPLES = 10000  # vertices used to refine the best plane
 ICP_ITERATIONS = 40
+ANDERSON_MEMORY = 5  # ICP steps the acceleration combines
 TRIM_FRACTION = 0.8  # correspondences kept per ICP step: the closest 80 %
 CONVERGED = 1e-5  # ICP stops when its trimmed RMS improves by less than this fraction
 DISTINCT = np.radians(5.0)  # planes whose normals are this far apart are distinct candidates
@@ -40,25 +41,63 @@ def _workers(queries: int) -> int:
 
 def _refine_plane(points: np.ndarray, tree: cKDTree, normal: np.ndarray, offset: float, flat=None,
                   converged: float = CONVERGED):
-    """Reflection ICP from one plane; returns (normal, offset, trimmed RMS distance). Stops when the
-    trimmed RMS improves by less than ``converged`` (relative) or after ICP_ITERATIONS."""
+    """Reflection ICP from one plane, with Anderson acceleration; returns (normal, offset, trimmed RMS
+    distance). Stops when the trimmed RMS improves by less than ``converged`` (relative) or after
+    ICP_ITERATIONS.
+
+    Plain reflection ICP creeps on a shape that is not symmetric: each step moves the plane by a nearly
+    constant fraction of the way left (a linear rate of about 0.95 on the deformed Igea). Anderson
+    acceleration over the last ANDERSON_MEMORY steps (as AA-ICP, Pavlov et al., ICRA 2018) extrapolates
+    them; a step that does not lower the trimmed RMS is replaced by the plain one. Hand-written:
+    scipy.optimize.anderson solves F(x) = 0 without the safeguard that the correspondences' jumps need.
+    On eight corpus meshes it comes within 0.1 % of the trimmed RMS of 200 plain steps in 10-33 steps, in
+    0.4-0.8x the time of the plain 40 (docs/benchmarks.md, "The mirror plane's ICP")."""
     best = None
+    plane = np.append(normal, offset)
+    history, plain = [], None  # (plane, its ICP step) of the last steps; the plain step behind an extrapolation
     for _ in range(ICP_ITERATIONS):
-        distance, nearest = tree.query(reflection_across_plane(points, normal, offset), workers=_workers(len(points)))
+        distance, nearest = tree.query(reflection_across_plane(points, plane[:3], plane[3]),
+                                       workers=_workers(len(points)))
         cut = np.quantile(distance, TRIM_FRACTION)
         keep = distance <= cut
         rms = float(np.sqrt(np.mean(distance[keep] ** 2)))
         if best is not None and rms >= best[2] * (1.0 - converged):
-            break
-        best = (normal, offset, rms)
+            if plain is None:
+                break
+            plane, plain, history = plain, None, []  # the extrapolation did not pay: the plain step instead
+            continue
+        best = (plane[:3], float(plane[3]), rms)
         # points[i] mirrors to near points[nearest[i]]: they are a mirror pair.
         fit = fit_mirror_plane(points[keep], points[nearest[keep]])
         fitted = _in_plane(fit.normal, flat)
         if not np.any(fitted):
             break
         middle = 0.5 * (points[keep] + points[nearest[keep]])
-        normal, offset = fitted, (fit.offset if flat is None else float(fitted @ middle.mean(axis=0)))
+        step = np.append(fitted, fit.offset if flat is None else float(fitted @ middle.mean(axis=0)))
+        if step[:3] @ plane[:3] < 0:  # one plane, two signs: keep the side
+            step = -step
+        history = (history + [(plane, step)])[-ANDERSON_MEMORY:]
+        plane, plain = _extrapolated(history, flat), step
+        if plane is None:
+            plane, plain = step, None
     return best
+
+
+def _extrapolated(history: list[tuple[np.ndarray, np.ndarray]], flat) -> np.ndarray | None:
+    """Anderson's extrapolation of the ICP steps ``history`` ((plane (4,), its step (4,)), oldest first): the
+    combination of the steps whose residuals (step - plane) combine to the least, as a plane; None with
+    fewer than two steps or a degenerate one."""
+    if len(history) < 2:
+        return None
+    planes, steps = (np.array(side) for side in zip(*history))
+    residuals = steps - planes
+    weights = np.linalg.lstsq(np.diff(residuals, axis=0).T, residuals[-1], rcond=None)[0]
+    plane = steps[-1] - np.diff(steps, axis=0).T @ weights
+    normal = _in_plane(plane[:3], flat)
+    length = np.linalg.norm(normal)
+    if not np.isfinite(plane).all() or length == 0:
+        return None
+    return np.append(normal / length, plane[3])
 
 
 def fit_surface_mirror_plane(points: np.ndarray, initial: MirrorFit | None = None,
