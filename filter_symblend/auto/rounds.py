@@ -150,7 +150,8 @@ def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: d
     if landmarks is None:
         try:
             mirror, shares, plane = first_map(surface, scored, config, scaled_progress(progress, 0.0, 30.0))
-            start = {"coverage": shares, "surface_plane": MirrorPlane(np.asarray(plane[0], dtype=float), float(plane[1]))}
+            start = {"coverage": shares,
+                     "surface_plane": MirrorPlane(np.asarray(plane[0], dtype=float), float(plane[1]))}
             result, best = None, np.inf
         except SymmetryNotFoundError as refusal:  # a strongly posed body, or a shape with no mirror symmetry
             if core["mode"] != "articulated":  # the intrinsic mirror holds under isometries: a pose, not a compression

@@ -3,8 +3,9 @@ the widths, the local fits, the timings) and the parts the layers above add (the
 region, the automatic pairs, the before/after checks, warnings).
 
 Every layer reads these attributes; :meth:`Report.to_dict` is the one JSON form: the MeshSet filter's return
-value, the command's ``--report`` file and ``symblend batch``'s table read it (the report table of docs/method.md lists its keys).
-A part another layer fills (``auto_pairs``, ``checks``) only needs ``to_dict()``.
+value, the command's ``--report`` file, and what ``symblend batch``'s table reads (the report table of
+docs/method.md lists its keys). A part another layer fills (``auto_pairs``, ``checks``) needs only its
+``warnings`` and ``to_dict()``.
 """
 
 from __future__ import annotations
@@ -66,7 +67,7 @@ class LandmarkAsymmetry:
 
 @dataclasses.dataclass(frozen=True)
 class Widths:
-    """The neighbourhood widths used (docs/parameters.md): the landmarks' ``mean_landmark_spacing`` measured,
+    """The neighbourhood widths used (the README's parameters): the landmarks' ``mean_landmark_spacing`` measured,
     the ``width_spacing`` the widths are multiples of, ``phi_width`` and ``theta_width`` (in spacings)
     and ``phi_h``, ``theta_h`` (mesh units), and ``alpha``."""
 
@@ -186,7 +187,8 @@ class Report:
         return dataclasses.replace(self, **changes)
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON form: flat keys as the report table of docs/method.md lists them; parts that do not apply are left out."""
+        """The JSON form: flat keys, as the report table of docs/method.md lists them; the parts that do not
+        apply are left out."""
         widths, fit = self.widths, self.local_fit
         out: dict[str, Any] = {
             "pair_count": self.pair_count,

@@ -116,13 +116,12 @@ def _solved_plane(points: np.ndarray, landmarks, mirror_pairs):
 def _compute(mesh: pymeshlab.Mesh, options: dict, found: dict, given: LandmarkPairs | None, progress,
              pool: ThreadPoolExecutor, seconds: dict):
     """(the warp of ``mesh`` with the fill of its missing region, {"before", "after", "hausdorff": future} of
-    its checks); no
-    layer added. ``options``: every parameter, validated; ``found``: the mesh's landmark attributes, read
-    once (meshlab/attributes.read_attributes); ``given``: the landmarks a caller already holds, used instead
-    of decoding ``found``. The checks run in ``pool`` once the problem is
-    valid, each against the solved pairs' plane on its surface (measures/surface_asymmetry): the input's
-    beside the warp with landmark pairs, once they are known with automatic pairs; the output's once the
-    warp is known. Each check's own seconds go to ``seconds`` under its report key."""
+    its checks); no layer added. ``options``: every parameter, validated; ``found``: the mesh's landmark
+    attributes, read once (meshlab/attributes.read_attributes); ``given``: the landmarks a caller already
+    holds, used instead of decoding ``found``. The checks run in ``pool`` once the problem is valid, each
+    against the solved pairs' plane on its surface (measures/surface_asymmetry): the input's beside the warp
+    with landmark pairs, once they are known with automatic pairs; the output's once the warp is known. Each
+    check's own seconds go to ``seconds`` under its report key."""
     faces = mesh.face_matrix()
     region = _missing_region(mesh, faces, options["missing_region"], options["weight_attribute"],
                              found.get(options["weight_attribute"]))
@@ -164,7 +163,6 @@ def _needs_nothing(checks: dict[str, Future], landmarks: LandmarkAsymmetry | Non
         return False
     return nothing_to_restore(checks["before"].result(), checks["after"].result(),
                               None if landmarks is None else landmarks.max_relative)
-
 
 
 def _the_input(result, points: np.ndarray, frame: str):

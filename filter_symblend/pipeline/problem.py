@@ -1,8 +1,9 @@
-"""The problem a run solves, converted and validated once: ``build_problem`` checks the arguments in a fixed
-order (the options, then the points, the faces, the vertices kept out, the missing region, whether the
-landmarks fit the pair source, and the landmarks themselves), each message naming the argument, as
-scipy's RBFInterpolator does; every adapter (the MeshSet filter, the command, a batch row, a filter
-script) builds one and hands it to :func:`filter_symblend.pipeline.solve_problem`."""
+"""The problem a run solves, converted and validated once: the options by ``parameters.validate_parameters``
+(an ``Options``, which no door checks again), then ``build_problem`` checks the other arguments in a fixed
+order (the points, the faces, the vertices kept out, the missing region, whether the landmarks fit the pair
+source, and the landmarks themselves), each message naming the argument, as scipy's RBFInterpolator does;
+every adapter (the MeshSet filter, the command, a batch row, a filter script) builds one and hands it to
+:func:`filter_symblend.pipeline.solve_problem`."""
 
 from __future__ import annotations
 

@@ -65,15 +65,16 @@ def read_landmarks(ms, args) -> tuple[LandmarkPairs, dict]:
     if missing:
         left_weights, right_weights = snapped.weights(missing)
         pairs = dataclasses.replace(pairs, left_weights=left_weights, right_weights=right_weights)
-    return pairs, {"file": str(args.landmarks), "frame": snapped.frame_note, "pairing": snapped.pairing,
-            "pair_table_written": table, "pairs": [list(p) for p in snapped.pair_names],
-            "midline": snapped.midline_names, "curves": snapped.curves,
-            "placed_point_spacing": snapped.placed_spacing, "missing": missing,
-            "snap_distance_max": float(snapped.snap_distances.max()), "left_out_unplaced": snapped.unplaced,
-            "vertices": [[name, int(vertex)] for names, vertices in (
-                ([a for a, _ in snapped.pair_names], snapped.pairs.left),
-                ([b for _, b in snapped.pair_names], snapped.pairs.right),
-                (snapped.midline_names, snapped.pairs.midline)) for name, vertex in zip(names, vertices)]}
+    record = {"file": str(args.landmarks), "frame": snapped.frame_note, "pairing": snapped.pairing,
+              "pair_table_written": table, "pairs": [list(p) for p in snapped.pair_names],
+              "midline": snapped.midline_names, "curves": snapped.curves,
+              "placed_point_spacing": snapped.placed_spacing, "missing": missing,
+              "snap_distance_max": float(snapped.snap_distances.max()), "left_out_unplaced": snapped.unplaced,
+              "vertices": [[name, int(vertex)] for names, vertices in (
+                  ([a for a, _ in snapped.pair_names], snapped.pairs.left),
+                  ([b for _, b in snapped.pair_names], snapped.pairs.right),
+                  (snapped.midline_names, snapped.pairs.midline)) for name, vertex in zip(names, vertices)]}
+    return pairs, record
 
 
 def write_landmarks(ms, args, names: dict) -> dict:
