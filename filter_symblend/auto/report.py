@@ -71,7 +71,7 @@ class Round:
         return self.start is not None
 
     def to_dict(self) -> dict[str, Any]:
-        if self.start is not None:
+        if self.is_start:
             return {_START_KEYS[self.start]: True, "surface_asymmetry": self.surface_asymmetry}
         out = {**self.search.to_dict(), "pairs": self.pairs, "midline": self.midline,
                "surface_asymmetry": self.surface_asymmetry, **self.raised_widths}

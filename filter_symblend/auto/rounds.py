@@ -22,7 +22,7 @@ import warnings
 
 import numpy as np
 
-from ..core.geometry import MirrorPlane, reflection_across_plane
+from ..core.geometry import reflection_across_plane
 from ..core.landmark_asymmetry import fit_mirror_plane
 from ..core.landmark_pairs import LandmarkPairs, check_landmarks
 from ..core.solve import SymmetrizationResult, scaled_progress, solve
@@ -150,8 +150,7 @@ def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: d
     if landmarks is None:
         try:
             mirror, shares, plane = first_map(surface, scored, config, scaled_progress(progress, 0.0, 30.0))
-            start = {"coverage": shares,
-                     "surface_plane": MirrorPlane(np.asarray(plane[0], dtype=float), float(plane[1]))}
+            start = {"coverage": shares, "surface_plane": plane}
             result, best = None, np.inf
         except SymmetryNotFoundError as refusal:  # a strongly posed body, or a shape with no mirror symmetry
             if core["mode"] != "articulated":  # the intrinsic mirror holds under isometries: a pose, not a compression
@@ -173,6 +172,7 @@ def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: d
     count = options["auto_pair_count"]
     round_count = min(count, config.round_pairs)
     exact_twins = None  # decided by the first round
+    given = (0, 0) if landmarks is None else (len(landmarks.left), len(landmarks.midline))  # the user's pairs, midline
     constraints = Constraints(surface, landmarks, forbidden, config)
 
     def attempt(mirror: MirrorMap, pairs_wanted: int, start: float):
@@ -184,8 +184,7 @@ def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: d
                                                    config.widenings)
         candidate = dataclasses.replace(candidate, points=candidate.points[:n], asymmetry=candidate.asymmetry[:n])
         entry = Round(surface_asymmetry(surface, candidate, scored), search=pairs.search,
-                      pairs=int(len(checked.left) - (0 if landmarks is None else len(landmarks.left))),
-                      midline=int(len(checked.midline) - (0 if landmarks is None else len(landmarks.midline))),
+                      pairs=int(len(checked.left) - given[0]), midline=int(len(checked.midline) - given[1]),
                       raised_widths={width: solve_options[width] for width in ("phi_width", "theta_width")
                                      if solve_options[width] != core[width]})
         return candidate, entry
@@ -233,8 +232,7 @@ def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: d
         progress(100.0, "done")
     kept = [entry for entry in history if entry.kept and not entry.is_start]
     report = AutomaticPairsReport(
-        pair_count=result.report.pair_count - (0 if landmarks is None else len(landmarks.left)),
-        midline_count=result.report.midline_count - (0 if landmarks is None else len(landmarks.midline)),
+        pair_count=result.report.pair_count - given[0], midline_count=result.report.midline_count - given[1],
         rounds=tuple(history), stopped=stopped, twins_are=kept[-1].search.twins_are if kept else None,
         consistency=kept[-1].search.consistency if kept else None, mirror_map=twins.report,
         excluded_vertices=int(0 if excluded is None else len(excluded)), warnings=tuple(messages), **start)
@@ -250,8 +248,8 @@ def _final(points, representative, result, landmarks, report, clock, twins) -> S
     else:
         before = fit_mirror_plane(points[landmarks.left], points[landmarks.right]).summary(final.diagonal)
         after = fit_mirror_plane(result.points[landmarks.left], result.points[landmarks.right]).summary(final.diagonal)
-    out = final.replace(pair_count=0 if landmarks is None else len(landmarks.left),
-                        midline_count=0 if landmarks is None else len(landmarks.midline), auto_pairs=report,
+    out = final.replace(pair_count=final.pair_count - report.pair_count,
+                        midline_count=final.midline_count - report.midline_count, auto_pairs=report,
                         landmark_asymmetry_before=before, landmark_asymmetry_after=after,
                         seconds=dataclasses.replace(final.seconds, total=time.perf_counter() - clock))
     points_out = result.points[representative]

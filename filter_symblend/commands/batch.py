@@ -106,7 +106,7 @@ def run_row(row: Row) -> dict:
         return {**summary, "output": "", "status": "failed", "seconds": round(time.perf_counter() - start, 2),
                 "error": message}  # no output: a failed row writes nothing
     return {**summary, "status": "ok", "seconds": round(time.perf_counter() - start, 2),
-            **_from_saved(done.document(), done.ms.current_mesh().vertex_matrix())}
+            **_from_saved(done.document, done.ms.current_mesh().vertex_matrix())}
 
 
 def _from_saved(saved: dict, points) -> dict:

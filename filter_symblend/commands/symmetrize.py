@@ -4,6 +4,7 @@ or from automatic pairs, through the MeshSet filter; the output mesh and the JSO
 from __future__ import annotations
 
 import dataclasses
+import functools
 import sys
 
 import pymeshlab
@@ -38,8 +39,10 @@ class Symmetrized:
     landmarks: dict | None
     ms: pymeshlab.MeshSet
 
+    @functools.cached_property
     def document(self) -> dict:
-        """The JSON report written by ``--report``: the filter's, with the landmark names under ``landmarks``."""
+        """The JSON report written by ``--report``: the filter's, with the landmark names under ``landmarks``
+        (built once: the file and a batch row's summary read the same)."""
         return {**self.run.to_dict(), "landmarks": self.landmarks}
 
 
@@ -64,7 +67,7 @@ def symmetrize_files(args, progress=None) -> Symmetrized:
     if landmarks and landmarks["curves"] and not params["width_spacing"]:
         params["width_spacing"] = landmarks["placed_point_spacing"]  # semilandmarks leave the widths as they were
     done = Symmetrized(run_filter(ms, params, progress, landmarks=pairs), landmarks, ms)
-    save_with_report(ms, args.output, args.report, done.document())
+    save_with_report(ms, args.output, args.report, done.document)
     return done
 
 

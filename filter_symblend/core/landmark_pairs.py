@@ -37,8 +37,10 @@ class LandmarkPairs:
                 object.__setattr__(self, side, np.ones(len(self.ids)))
 
     def is_weighted(self) -> bool:
-        """Whether any landmark has a weight other than 1 (a missing side, a pair of priority)."""
-        return bool(np.any(np.asarray(self.left_weights) != 1) or np.any(np.asarray(self.right_weights) != 1))
+        """Whether any landmark has a weight other than 1 (a missing side, a pair of priority); weights not
+        given (None) are all 1."""
+        return any(weights is not None and np.any(np.asarray(weights) != 1)
+                   for weights in (self.left_weights, self.right_weights))
 
     def both_sides(self) -> tuple[np.ndarray, np.ndarray]:
         """(left, right) vertices (c,) of the pairs given on both sides (weight > 0 on each): the pairs that

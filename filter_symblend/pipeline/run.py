@@ -23,13 +23,13 @@ def _filled(result: SymmetrizationResult, points, faces, missing: MissingRegion,
     report = result.report
     filled = fill_from_mirror(result.points, faces, missing.vertices, report.plane.normal, report.plane.offset,
                               missing.faces)
+    asymmetry = np.linalg.norm(filled - points, axis=1)
     report = report.replace(filled_vertices=int(np.count_nonzero(missing.vertices)))
     if frame == "canonical":
         transform = report.canonical_from_input
+        filled = filled @ transform[:3, :3].T + transform[:3, 3]
         report = report.replace(output_frame="canonical", plane=MirrorPlane(np.array([1.0, 0.0, 0.0]), 0.0))
-        return dataclasses.replace(result, points=filled @ transform[:3, :3].T + transform[:3, 3], report=report,
-                                   asymmetry=np.linalg.norm(filled - points, axis=1))
-    return dataclasses.replace(result, points=filled, asymmetry=np.linalg.norm(filled - points, axis=1), report=report)
+    return dataclasses.replace(result, points=filled, asymmetry=asymmetry, report=report)
 
 
 def _with_uncertainty(result: SymmetrizationResult, problem: Problem, core: dict, progress) -> SymmetrizationResult:
