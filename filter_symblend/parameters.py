@@ -208,8 +208,10 @@ PARAMETERS: tuple[Parameter, ...] = (
         "and the restoration repeated (Steps 1 and 2 again; the warp of every repetition in one evaluation); "
         "the output gets the per-vertex attribute `symblend_uncertainty` (the jackknife standard error of each "
         "restored vertex, mesh units) and the report `uncertainty` (its median, 90th percentile and max, each "
-        "pair's influence: how far the result moves without it, and the most influential pair). Landmark "
-        "pairs only ('landmarks'), at least 3 of them. 'none': not computed.",
+        "pair's influence: how far the result moves without it, and the most influential pair; each pair's "
+        "mirror error: how far from mirroring the others' restoration leaves it, and a warning naming a pair "
+        "that stands out as probably misplaced). Landmark pairs only ('landmarks'), at least 3 of them. "
+        "'none': not computed.",
         choices=("none", "jackknife"),
     ),
     Parameter(

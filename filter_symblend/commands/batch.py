@@ -36,7 +36,7 @@ from .symmetrize import landmark_name, symmetrize_files
 ASYMMETRY_FIELDS = ("landmark_asymmetry_before", "landmark_asymmetry_after", "mirror_asymmetry_before",
                     "mirror_asymmetry_after")  # report entries whose RMS (relative) the summary shows
 SUMMARY_FIELDS = ("mesh", "status", "seconds", *ASYMMETRY_FIELDS, "confident_share", "uncertainty_p90",
-                  "most_influential_pair", "output", "error")
+                  "most_influential_pair", "probably_misplaced", "output", "error")
 SCHEDULER_TIMEOUT = 30  # seconds to wait for a Dask scheduler to answer
 EXIT_TERMINATED = 143  # a worker stopped by SIGTERM, as the command itself exits
 
@@ -113,8 +113,8 @@ def _from_saved(saved: dict, points) -> dict:
     """What a specimen's summary takes from its JSON report (the file's form, so that a row done now and one
     done by an earlier run read alike) and output points (N, 3): the asymmetry columns
     (RMS, relative to the diagonal), with automatic pairs the confident share of their map, with
-    ``uncertainty`` its 90th percentile and the most influential pair's landmark names, and its
-    landmarks after symmetrizing ([[name, x, y, z], ...])."""
+    ``uncertainty`` its 90th percentile and the landmark names of the most influential pair and of a
+    probably misplaced one, and its landmarks after symmetrizing ([[name, x, y, z], ...])."""
     figures = {key: f"{saved[key]['rms_relative']:.6g}" for key in ASYMMETRY_FIELDS if key in saved}
     if "auto_pairs" in saved:  # the share of the surface whose automatic twin is confident
         figures["confident_share"] = f"{saved['auto_pairs']['mirror_map']['confident_share']:.3g}"
@@ -122,6 +122,9 @@ def _from_saved(saved: dict, points) -> dict:
         figures["uncertainty_p90"] = f"{saved['uncertainty']['p90_relative']:.6g}"
         figures["most_influential_pair"] = landmark_name(saved["uncertainty"]["most_influential_pair"],
                                                          saved.get("landmarks"))
+        misplaced = saved["uncertainty"].get("probably_misplaced")  # absent from reports of earlier versions
+        if misplaced is not None:
+            figures["probably_misplaced"] = landmark_name(misplaced, saved.get("landmarks"))
     placed = (saved.get("landmarks") or {}).get("vertices", [])
     return {**figures, "landmarks": [[name, *map(float, points[vertex])] for name, vertex in placed]}
 

@@ -111,9 +111,14 @@ def landmark_name(unit: str, landmarks: dict | None) -> str:
 
 
 def uncertainty_line(uncertainty: UncertaintySummary, landmarks: dict | None) -> str:
-    """One line of the report's ``uncertainty``, the most influential pair by its landmark names."""
-    top = uncertainty.most_influential_pair
-    return (f"uncertainty (jackknife, {uncertainty.left_out} landmarks left out in turn): median "
+    """One line of the report's ``uncertainty``: the most influential pair, and the probably misplaced one, by
+    their landmark names."""
+    top, misplaced = uncertainty.most_influential_pair, uncertainty.probably_misplaced
+    line = (f"uncertainty (jackknife, {uncertainty.left_out} landmarks left out in turn): median "
             f"{uncertainty.median_relative:.3%}, p90 {uncertainty.p90_relative:.3%}, max "
             f"{uncertainty.max_relative:.3%} of the diagonal; most influential: {landmark_name(top, landmarks)} "
             f"(the result moves up to {uncertainty.influence_relative[top]:.3%} without it)")
+    if misplaced is not None:
+        line += (f"; probably misplaced: {landmark_name(misplaced, landmarks)} (the others' restoration leaves it "
+                 f"{uncertainty.mirror_error_relative[misplaced]:.3%} of the diagonal from mirroring)")
+    return line

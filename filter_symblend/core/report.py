@@ -114,7 +114,9 @@ class Timings:
 class UncertaintySummary:
     """The jackknife (core/uncertainty), relative to the diagonal: the spread's ``median``, ``p90`` and
     ``max``; each left-out unit's ``influence`` (label -> how far the result moves without it), the
-    ``most_influential_pair``, and the units ``kept_in`` (label -> why they cannot be left out)."""
+    ``most_influential_pair``, the units ``kept_in`` (label -> why they cannot be left out); each unit's
+    ``mirror_error`` (label -> how far from mirroring the restoration by the others leaves it), the unit
+    that is ``probably_misplaced`` (or None) and the ``warnings`` that say so."""
 
     left_out: int
     median_relative: float
@@ -123,9 +125,12 @@ class UncertaintySummary:
     influence_relative: dict[str, float]
     most_influential_pair: str
     kept_in: dict[str, str]
+    mirror_error_relative: dict[str, float]
+    probably_misplaced: str | None = None
+    warnings: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
-        return {"method": "jackknife", **dataclasses.asdict(self)}
+        return {"method": "jackknife", **dataclasses.asdict(self), "warnings": list(self.warnings)}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -178,8 +183,8 @@ class Report:
 
     @property
     def warnings(self) -> tuple[str, ...]:
-        """The warnings of the automatic pairs and of the checks, in that order."""
-        return tuple(message for part in (self.auto_pairs, self.checks) if part is not None
+        """The warnings of the automatic pairs, of the uncertainty and of the checks, in that order."""
+        return tuple(message for part in (self.auto_pairs, self.uncertainty, self.checks) if part is not None
                      for message in part.warnings)
 
     def replace(self, **changes) -> Report:

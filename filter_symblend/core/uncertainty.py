@@ -9,11 +9,15 @@ the full spline's warp plus the spline of the target changes ``delta_j`` at the 
 with all the ``delta_j`` as columns gives every vertex's change for every j in one evaluation.
 
 Per vertex, the jackknife standard error of its restored position (mesh units),
-``sqrt((J - 1) / J * sum_j |d_j(x) - mean_j d_j(x)|^2)``; per unit, its influence: the largest
-distance any vertex moves without it. The most influential unit is named; no warning says that it is
-misplaced, because no rule tried told a landmark moved 3 % of the diagonal from the natural spread of
-influences (docs/uncertainty.md: Tukey's fences and robust z-scores either missed it or fired on
-most sound sets).
+``sqrt((J - 1) / J * sum_j |d_j(x) - mean_j d_j(x)|^2)``; per unit, its influence (the largest distance
+any vertex moves without it) and its cross-validated mirror error: how far from mirror images the
+restoration by the others leaves its two landmarks (a midline landmark: from its own mirror image), about
+the full solve's plane. A landmark slipped by s lies about s from where the others put it; a sound one
+lies as far as the others can predict it, which grows with the gap to its neighbours. So the error, over
+the distance to the unit's fourth-nearest neighbour, is compared with the median of the same over all
+units: a unit ``MISPLACED_RATIO`` times the median, and at least ``MISPLACED_ERROR`` of the diagonal from
+mirroring, is named as probably misplaced (docs/uncertainty.md: chosen on one half of the draws, checked
+on the other).
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ..errors import GeometryError, SymblendError
 from .geometry import rigid_fit
@@ -30,27 +35,63 @@ from .solve import LandmarkTargets, landmark_targets
 from .warp import thin_plate_spline
 
 EVALUATED_VALUES = 2**24  # vertices x columns per evaluation of the changes (128 MB of float64)
+# A unit is probably misplaced when its cross-validated mirror error over its neighbour gap is this many times
+# the median of the units (the 95th percentile of the largest in sound sets of 20-100 pairs on the cow under
+# three deformations, one half of the draws; 4 % of sound sets warn on the other half; docs/uncertainty.md) ...
+MISPLACED_RATIO = 25.0
+MISPLACED_NEIGHBOUR = 4  # ... the gap: to the fourth-nearest unit (tried 1-4 and 6: the 2nd and 3rd warned as rarely
+# but named fewer slips, the 1st named fewer still, the 6th warned more)
+MISPLACED_ERROR = 0.01  # ... and the error is at least this share of the diagonal: a hand's placement precision
 
 
 @dataclasses.dataclass(frozen=True)
 class Uncertainty:
     """``per_vertex`` (N,): jackknife standard error of each restored vertex, mesh units; ``influence``
-    (J,): the largest distance a vertex moves when unit j is left out, mesh units; ``units`` (J >= 2,):
-    their labels (pair ids, ``midline k``); ``kept_in``: units that cannot be left out, with why."""
+    (J,): the largest distance a vertex moves when unit j is left out, mesh units; ``mirror_error`` (J,):
+    its cross-validated mirror error, mesh units; ``positions`` (J, 3): where each unit is (a pair's
+    midpoint); ``units`` (J >= 2,): their labels (pair ids, ``midline k``); ``kept_in``: units that cannot be
+    left out, with why."""
 
     per_vertex: np.ndarray
     influence: np.ndarray
+    mirror_error: np.ndarray
+    positions: np.ndarray
     units: list[str]
     kept_in: dict[str, str]
 
+    def probably_misplaced(self, diagonal: float) -> int | None:
+        """The index of the unit whose mirror error stands out (see the module doc), or None; needs more
+        than ``MISPLACED_NEIGHBOUR`` units."""
+        if len(self.units) <= MISPLACED_NEIGHBOUR:
+            return None
+        gap = cKDTree(self.positions).query(self.positions, MISPLACED_NEIGHBOUR + 1)[0][:, -1]  # itself first
+        scaled = self.mirror_error / np.maximum(gap, np.finfo(float).tiny)
+        worst = int(np.argmax(scaled))
+        stands_out = scaled[worst] > MISPLACED_RATIO * np.median(scaled)
+        return worst if stands_out and self.mirror_error[worst] >= MISPLACED_ERROR * diagonal else None
+
     def summary(self, diagonal: float) -> UncertaintySummary:
-        """The report's part: the spread's median, 90th percentile and max, and each unit's influence,
-        relative to ``diagonal``, and the most influential unit."""
+        """The report's part: the spread's median, 90th percentile and max, each unit's influence and mirror
+        error, relative to ``diagonal``, the most influential unit, and the probably misplaced one with its
+        warning."""
         p50, p90 = np.percentile(self.per_vertex, [50, 90])
+        misplaced = self.probably_misplaced(diagonal)
+        warnings = () if misplaced is None else (_misplaced_warning(self.units[misplaced],
+                                                                    self.mirror_error[misplaced], diagonal),)
         return UncertaintySummary(len(self.units), float(p50 / diagonal), float(p90 / diagonal),
                                   float(self.per_vertex.max() / diagonal),
                                   {unit: float(value / diagonal) for unit, value in zip(self.units, self.influence)},
-                                  self.units[int(np.argmax(self.influence))], dict(self.kept_in))
+                                  self.units[int(np.argmax(self.influence))], dict(self.kept_in),
+                                  {unit: float(value / diagonal) for unit, value in zip(self.units, self.mirror_error)},
+                                  None if misplaced is None else self.units[misplaced], warnings)
+
+
+def _misplaced_warning(unit: str, error: float, diagonal: float) -> str:
+    named = f"pair {unit}" if unit.isdigit() else unit
+    what = "its two landmarks" if unit.isdigit() else "it"
+    return (f"Landmark {named} is probably misplaced or mislabelled: the restoration by the other landmarks leaves "
+            f"{what} {error:.4g} ({error / diagonal:.2%} of the diagonal) from mirroring, far more than the others "
+            f"(report: uncertainty.mirror_error_relative). Check where it was placed, or leave it out.")
 
 
 def _without(landmarks: LandmarkPairs, pair: int | None, midline: int | None) -> LandmarkPairs:
@@ -60,9 +101,9 @@ def _without(landmarks: LandmarkPairs, pair: int | None, midline: int | None) ->
                          landmarks.left_weights[keep], landmarks.right_weights[keep])
 
 
-def _target_change(points: np.ndarray, full: LandmarkTargets, reduced: LandmarkTargets) -> np.ndarray:
-    """(k, 3): how each landmark's target moves from ``full`` to ``reduced`` (fewer landmarks), the reduced
-    targets fitted rigidly onto the full ones and the missing landmarks given the reduced spline's values."""
+def _reduced_targets(points: np.ndarray, full: LandmarkTargets, reduced: LandmarkTargets) -> np.ndarray:
+    """(k, 3): each of ``full``'s landmarks where ``reduced`` (fewer landmarks) puts it, its targets fitted
+    rigidly onto the full ones and the missing landmarks given the reduced spline's values."""
     row = {vertex: index for index, vertex in enumerate(full.vertices)}
     common = np.array([row[vertex] for vertex in reduced.vertices])
     rotation, translation = rigid_fit(reduced.target, full.target[common])
@@ -73,7 +114,14 @@ def _target_change(points: np.ndarray, full: LandmarkTargets, reduced: LandmarkT
     centres = points[reduced.vertices]
     spline = thin_plate_spline(centres, target - centres, full.flat)
     changed[missing] = points[full.vertices[missing]] + spline(points[full.vertices[missing]])
-    return changed - full.target
+    return changed
+
+
+def _mirror_gap(full: LandmarkTargets, positions: np.ndarray, first: int, second: int) -> float:
+    """How far the landmarks at rows ``first`` and ``second`` of ``positions`` (k, 3), in the input frame, are
+    from mirror images about ``full``'s plane (the canonical frame's x = 0), mesh units."""
+    canonical = (positions[[first, second]] - full.translation) @ full.rotation
+    return float(np.linalg.norm(canonical[0] * [-1.0, 1.0, 1.0] - canonical[1]))
 
 
 def jackknife(points: np.ndarray, landmarks: LandmarkPairs, options: dict, full: LandmarkTargets) -> Uncertainty:
@@ -83,14 +131,19 @@ def jackknife(points: np.ndarray, landmarks: LandmarkPairs, options: dict, full:
     units = [(index, None) for index in range(len(landmarks.left))]
     units += [(None, index) for index in range(len(landmarks.midline))]
     fixed = {**options, "width_spacing": full.spacing}  # the widths of the full solve: only the data vary
-    changes, left_out, kept_in = [], [], {}
+    pairs = len(landmarks.left)
+    changes, mirror_error, positions, left_out, kept_in = [], [], [], [], {}
     for label, (pair, midline) in zip(labels, units):
         try:
             reduced = landmark_targets(points, _without(landmarks, pair, midline), fixed)
         except SymblendError as error:  # e.g. the pairs fall apart without it
             kept_in[label] = str(error)
             continue
-        changes.append(_target_change(points, full, reduced))
+        targets = _reduced_targets(points, full, reduced)
+        rows = (pair, pairs + pair) if midline is None else (2 * pairs + midline,) * 2  # full.vertices' order
+        changes.append(targets - full.target)
+        mirror_error.append(_mirror_gap(full, targets, *rows))
+        positions.append(points[full.vertices[list(rows)]].mean(axis=0))
         left_out.append(label)
     count = len(changes)
     if count < 2:
@@ -112,7 +165,7 @@ def jackknife(points: np.ndarray, landmarks: LandmarkPairs, options: dict, full:
         squares += (distances**2).sum(axis=1)
         influence[start:start + group] = distances.max(axis=0)
     spread = np.sqrt(np.maximum((count - 1) / count * (squares - (total**2).sum(axis=1) / count), 0.0))
-    return Uncertainty(spread, influence, left_out, kept_in)
+    return Uncertainty(spread, influence, np.array(mirror_error), np.array(positions), left_out, kept_in)
 
 
 def _spline_values(centres: np.ndarray, changes: np.ndarray, flat: np.ndarray | None, points: np.ndarray) -> np.ndarray:

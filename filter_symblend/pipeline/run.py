@@ -5,6 +5,7 @@ pairs, or both, then the missing region's fill, the output frame and the uncerta
 from __future__ import annotations
 
 import dataclasses
+import warnings
 
 import numpy as np
 
@@ -13,6 +14,7 @@ from ..core.mirror_fill import fill_from_mirror
 from ..core.geometry import MirrorPlane
 from ..core.solve import SymmetrizationResult, landmark_targets, scaled_progress, solve
 from ..core.uncertainty import jackknife
+from ..errors import SymblendWarning
 from ..parameters import CORE, options_of
 from .problem import MissingRegion, Problem
 
@@ -40,10 +42,13 @@ def _with_uncertainty(result: SymmetrizationResult, problem: Problem, core: dict
                        "landmarks left out in turn")
     full = landmark_targets(problem.points, problem.landmarks, core)
     measured = jackknife(problem.points, problem.landmarks, core, full)
+    summary = measured.summary(result.report.diagonal)
+    for message in summary.warnings:
+        warnings.warn(message, SymblendWarning, stacklevel=4)
     if progress is not None:
         progress(100.0, "done")
     return dataclasses.replace(result, uncertainty=measured.per_vertex,
-                               report=result.report.replace(uncertainty=measured.summary(result.report.diagonal)))
+                               report=result.report.replace(uncertainty=summary))
 
 
 def solve_problem(problem: Problem, progress=None) -> SymmetrizationResult:
