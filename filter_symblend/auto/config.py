@@ -96,6 +96,13 @@ class AutoConfig:
     coincident: float = _field(
         1e-9, "x bounding-box diagonal",
         "positions closer than this are one position (rounding); also the least precision a map is asked for")
+    part_left_asymmetric: float = _field(
+        0.02, "x bounding-box diagonal",
+        "in articulated mode, an output from a map of space whose 99th percentile of distance to its own "
+        "reflection exceeds this has a part left asymmetric (a limb no smooth map followed), and the intrinsic "
+        "start is tried too: about the geometric middle (1.8 %) of the remeshed cow's unrestored swung legs "
+        "(3.2 and 8.3 %) and the restored bends and legs of it and of spot (at most 1.0 %); checked on the BCICP "
+        "shapes paired by maps of space (sound: at most 1.6 %; four TOSCA dogs above it, 4.5-12.5 %)")
     widenings: int = _field(
         4, "doublings",
         "times theta_width may double where the automatic pairs' neighbourhoods are flat (a straight outline), "

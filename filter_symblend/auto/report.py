@@ -91,7 +91,9 @@ class AutomaticPairsReport:
     ``consistency``, the ``mirror_map`` the result carries, the ``excluded_vertices`` count, the share each
     first map mirrored (``coverage``: name -> share) and the input's ``surface_plane`` (both None when
     landmarks or the intrinsic mirror started the rounds), what the intrinsic start tried
-    (``intrinsic_start``, a diagnostic record; None unless it ran) and the ``warnings`` raised."""
+    (``intrinsic_start``, a diagnostic record; None unless it ran), the output's distance to its own
+    reflection over the scored vertices (``output_asymmetry``: RMS, ``output_asymmetry_p99``: 99th
+    percentile; / diagonal) and the ``warnings`` raised."""
 
     pair_count: int
     midline_count: int
@@ -104,6 +106,8 @@ class AutomaticPairsReport:
     coverage: dict[str, float] | None = None
     surface_plane: MirrorPlane | None = None
     intrinsic_start: dict[str, Any] | None = None
+    output_asymmetry: float | None = None
+    output_asymmetry_p99: float | None = None
     warnings: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
@@ -118,5 +122,6 @@ class AutomaticPairsReport:
         if self.warnings:
             out["warnings"] = list(self.warnings)
         out.update(stopped=self.stopped, pair_count=self.pair_count, midline_count=self.midline_count,
-                   twins_are=self.twins_are, consistency=self.consistency, mirror_map=self.mirror_map.to_dict())
+                   twins_are=self.twins_are, consistency=self.consistency, mirror_map=self.mirror_map.to_dict(),
+                   output_asymmetry=self.output_asymmetry, output_asymmetry_p99=self.output_asymmetry_p99)
         return out

@@ -11,7 +11,9 @@ input, so the next map is a field registered on the output, from its own plane, 
 The rounds stop when the map pairs ``plane_suffices`` of the sample, when the output no longer moves,
 or when a round leaves it less mirror-symmetric than the one before (that round is not kept). The last
 solve takes ``auto_pair_count`` pairs from the best round's map. Every result carries that map: each
-vertex's twin with a confidence (:mod:`.confidence`).
+vertex's twin with a confidence (:mod:`.confidence`). In ``mode='articulated'``, rounds from a map of space
+that leave a part of the output far from its mirror image (a limb no smooth map followed) are run again
+from the intrinsic start, and the more mirror-symmetric output is kept.
 """
 
 from __future__ import annotations
@@ -76,15 +78,25 @@ def _output_map(surface: Surface, result: SymmetrizationResult, sample: np.ndarr
 
 def plane_asymmetry(surface: Surface, normal: np.ndarray, offset: float, sample: np.ndarray) -> float:
     """RMS distance of the ``sample`` vertices of ``surface`` to its reflection across the plane, / diagonal."""
-    mirrored = reflection_across_plane(surface.points[sample], np.asarray(normal), offset)
-    distance = surface.nearest_points(mirrored)[1]
-    return float(np.sqrt(np.mean(distance**2)) / surface.diagonal)
+    return float(np.sqrt(np.mean(_plane_distances(surface, normal, offset, sample)**2)))
 
 
 def surface_asymmetry(surface: Surface, result: SymmetrizationResult, sample: np.ndarray) -> float:
     """RMS distance of the ``sample`` vertices of the output to its reflection across its plane, / diagonal."""
-    return plane_asymmetry(surface.moved(result.points), result.report.plane.normal, result.report.plane.offset,
-                           sample)
+    return output_asymmetry(surface, result, sample)[0]
+
+
+def output_asymmetry(surface: Surface, result: SymmetrizationResult, sample: np.ndarray) -> tuple[float, float]:
+    """The RMS and the 99th percentile of the distances of the ``sample`` vertices of the output to its
+    reflection across its plane, / diagonal."""
+    distances = _plane_distances(surface.moved(result.points), result.report.plane.normal,
+                                 result.report.plane.offset, sample)
+    return float(np.sqrt(np.mean(distances**2))), float(np.percentile(distances, 99))
+
+
+def _plane_distances(surface: Surface, normal: np.ndarray, offset: float, sample: np.ndarray) -> np.ndarray:
+    mirrored = reflection_across_plane(surface.points[sample], np.asarray(normal), offset)
+    return surface.nearest_points(mirrored)[1] / surface.diagonal
 
 
 def _refusal_saying(refusal: SymmetryNotFoundError, sentence: str) -> SymmetryNotFoundError:
@@ -93,6 +105,12 @@ def _refusal_saying(refusal: SymmetryNotFoundError, sentence: str) -> SymmetryNo
     return SymmetryNotFoundError(f"{found} {sentence}{advice}{rest}")
 
 
+PART_LEFT_WARNING = (
+    "the rounds from a map of space left a part of the output asymmetric (99th percentile {p99:.2%} of the "
+    "diagonal); the intrinsic mirror's pairs (a posed body) restored it better (RMS distance to its reflection "
+    "{maps:.3%} -> {intrinsic:.3%}) and were kept. The intrinsic mirror can mistake one symmetry for another: "
+    "check the result, or the pairs (symblend pairs MESH -o pairs.pp; find_mirror_pairs in Python), and correct "
+    "them in MeshLab's PickPoints.")
 INTRINSIC_START_WARNING = (
     "no map of space mirrors enough of this shape; it was paired by its intrinsic mirror (a posed body), which "
     "can mistake one symmetry for another: check the result, or the pairs (symblend pairs MESH -o pairs.pp; "
@@ -100,8 +118,9 @@ INTRINSIC_START_WARNING = (
 
 
 def _intrinsic_first_output(points, surface, core, scored, config, refusal, progress):
-    """The output of the intrinsic mirror's vertex pairs when no map mirrors enough of the surface
-    (:mod:`.intrinsic_start`) and what was tried; the refusal, with the reason, if they give none."""
+    """The output of the intrinsic mirror's vertex pairs (:mod:`.intrinsic_start`) and what was tried: when no
+    map mirrors enough of the surface (``refusal``), the refusal, with the reason, if they give none; asked for
+    (``refusal`` None), a None output then."""
     if progress is not None:
         progress(10.0, "no map mirrors enough of the surface: the intrinsic mirror's own pairs")
 
@@ -111,6 +130,8 @@ def _intrinsic_first_output(points, surface, core, scored, config, refusal, prog
         return _solve_widening(points, checked, core, None, 0)[0]
 
     result, tried = intrinsic_start(surface, config, solve_pairs, lambda out: surface_asymmetry(surface, out, scored))
+    if refusal is None:
+        return result, tried
     if result is None:
         raise _refusal_saying(refusal, cannot_start(tried)) from None
     tried["refused_maps"] = str(refusal)
@@ -122,7 +143,49 @@ def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: d
                                progress=None, config: AutoConfig = DEFAULT) -> SymmetrizationResult:
     """``pairs='auto'`` (``landmarks`` None) or ``'landmarks+auto'`` on checked ``points`` (N, 3) and
     ``faces`` (F, 3) (empty: a point cloud) with validated ``options``. ``excluded`` (k,): vertices no
-    automatic pair may use, nor pair with (a missing or broken part)."""
+    automatic pair may use, nor pair with (a missing or broken part).
+
+    In ``mode='articulated'``, when the rounds from a map of space leave a part of the output asymmetric
+    (the 99th percentile of its distance to its own reflection above ``part_left_asymmetric``: a limb that
+    no smooth map followed), the rounds are run again from the intrinsic start, and the output that is the
+    more mirror-symmetric (RMS) is kept; the report's ``intrinsic_start`` says why and what each gave."""
+    first = _paired(points, faces, options, "maps" if landmarks is None else landmarks, excluded, progress, config)
+    auto = first.report.auto_pairs
+    if (landmarks is not None or options["mode"] != "articulated" or auto.intrinsic_start is not None
+            or auto.output_asymmetry_p99 <= config.part_left_asymmetric):
+        return _warned(first)
+    if progress is not None:
+        progress(100.0, f"a part left asymmetric ({auto.output_asymmetry_p99:.2%} of the diagonal): the rounds "
+                        "again from the intrinsic start")
+    second = _paired(points, faces, options, "intrinsic", excluded, None, config)
+    if second is None:
+        return _warned(first)
+    maps, intrinsic = auto.output_asymmetry, second.report.auto_pairs.output_asymmetry
+    kept = second if intrinsic < maps else first
+    why = {"because": f"the rounds from the {auto.mirror_map.map} left a part asymmetric (99th percentile "
+                      f"{auto.output_asymmetry_p99:.3g} of the diagonal)",
+           "maps_asymmetry": maps, "intrinsic_asymmetry": intrinsic, "kept": "intrinsic" if kept is second else "maps"}
+    said = kept.report.auto_pairs.warnings
+    if kept is second:
+        said = (PART_LEFT_WARNING.format(p99=auto.output_asymmetry_p99, maps=maps, intrinsic=intrinsic), *said)
+    kept_auto = dataclasses.replace(kept.report.auto_pairs, warnings=said,
+                                    intrinsic_start={**(second.report.auto_pairs.intrinsic_start or {}), **why})
+    return _warned(dataclasses.replace(kept, report=kept.report.replace(auto_pairs=kept_auto)))
+
+
+def _warned(result: SymmetrizationResult) -> SymmetrizationResult:
+    """``result``, its automatic pairs' warnings raised."""
+    for message in result.report.auto_pairs.warnings:
+        warnings.warn(message, SymblendWarning, stacklevel=4)
+    return result
+
+
+def _paired(points: np.ndarray, faces: np.ndarray, options: dict, start: LandmarkPairs | str,
+            excluded: np.ndarray | None, progress, config: AutoConfig) -> SymmetrizationResult | None:
+    """The rounds, started from the user's landmark pairs (``start``), from the first map of space
+    (``"maps"``: the intrinsic start if none mirrors enough, in articulated mode) or from the intrinsic start
+    (``"intrinsic"``: None if it gives nothing); warnings in the report, not raised."""
+    landmarks = start if isinstance(start, LandmarkPairs) else None
     clock = time.perf_counter()
     n = len(points)
     forbidden = np.zeros(n, dtype=bool)
@@ -145,19 +208,27 @@ def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: d
     sample = spread(points, surface.usable_index, max(config.samples, 2 * options["auto_pair_count"]))
     scored = spread(points, surface.usable_index, config.score_samples)
     registration = spread(points, surface.usable_index, config.registration_samples)
-    start = {}  # how the rounds started: the first map's coverage and plane, or the intrinsic start
+    origin = {}  # how the rounds started: the first map's coverage and plane, or the intrinsic start
     history, messages = [], []
-    if landmarks is None:
+    if landmarks is None and start == "intrinsic":
+        result, tried = _intrinsic_first_output(points, surface, core, scored, config, None, progress)
+        if result is None:
+            return None
+        origin = {"intrinsic_start": tried}
+        best = surface_asymmetry(surface, result, scored)
+        history.append(Round(best, start="intrinsic"))
+        mirror = _output_map(surface, result, registration, config)
+    elif landmarks is None:
         try:
             mirror, shares, plane = first_map(surface, scored, config, scaled_progress(progress, 0.0, 30.0))
-            start = {"coverage": shares, "surface_plane": plane}
+            origin = {"coverage": shares, "surface_plane": plane}
             result, best = None, np.inf
         except SymmetryNotFoundError as refusal:  # a strongly posed body, or a shape with no mirror symmetry
             if core["mode"] != "articulated":  # the intrinsic mirror holds under isometries: a pose, not a compression
                 raise _refusal_saying(refusal, "If it is a posed body, mode='articulated' pairs it by its intrinsic "
                                                "mirror.") from None
             result, tried = _intrinsic_first_output(points, surface, core, scored, config, refusal, progress)
-            start = {"intrinsic_start": tried}
+            origin = {"intrinsic_start": tried}
             best = surface_asymmetry(surface, result, scored)
             history.append(Round(best, start="intrinsic"))
             messages.append(INTRINSIC_START_WARNING)
@@ -226,16 +297,16 @@ def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: d
     doubtful = doubtful_map_warning(twins.report)
     if doubtful is not None:
         messages.append(doubtful)
-    for message in messages:
-        warnings.warn(message, SymblendWarning, stacklevel=3)
     if progress is not None:
         progress(100.0, "done")
     kept = [entry for entry in history if entry.kept and not entry.is_start]
+    rms, p99 = output_asymmetry(surface, result, scored)
     report = AutomaticPairsReport(
         pair_count=result.report.pair_count - given[0], midline_count=result.report.midline_count - given[1],
         rounds=tuple(history), stopped=stopped, twins_are=kept[-1].search.twins_are if kept else None,
         consistency=kept[-1].search.consistency if kept else None, mirror_map=twins.report,
-        excluded_vertices=int(0 if excluded is None else len(excluded)), warnings=tuple(messages), **start)
+        excluded_vertices=int(0 if excluded is None else len(excluded)), output_asymmetry=rms, output_asymmetry_p99=p99,
+        warnings=tuple(messages), **origin)
     return _final(points, surface.representative, result, landmarks, report, clock, twins)
 
 
