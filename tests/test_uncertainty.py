@@ -119,6 +119,26 @@ def test_a_landmark_far_off_its_place_is_named_as_probably_misplaced(cow):
     assert warned <= 1
 
 
+def test_a_midline_landmark_off_the_plane_is_named_by_twice_its_distance_from_it(cow):
+    """Eight midline landmarks on the cow's plane among 40 pairs: none named. The third moved to a vertex about
+    10 % of the diagonal away and off the plane by d: its mirror image is 2 d away, and it is named."""
+    points = synthetic.bend(cow.points, 0.3)
+    left, right = cow.landmarks(40)
+    on_plane = np.flatnonzero(np.abs(cow.points[:, 0] - cow.offset) < 1e-9)
+    midline = on_plane[np.linspace(0, len(on_plane) - 1, 8).astype(int)]
+    sound = symmetrize(points, left, right, midline=midline, uncertainty="jackknife").report.uncertainty
+    assert sound.probably_misplaced is None and sound.left_out == 48
+    off = np.abs(cow.points[:, 0] - cow.offset)
+    distance = np.linalg.norm(cow.points - cow.points[midline[2]], axis=1)
+    moved = midline.copy()
+    moved[2] = np.argmin(np.abs(distance - 0.10 * cow.diagonal) + np.where(off < 0.02 * cow.diagonal, np.inf, 0.0))
+    with pytest.warns(SymblendWarning, match=r"Landmark midline 3 is probably misplaced or mislabelled: the "
+                                             r"restoration by the other landmarks leaves it [0-9.]+ "):
+        measured = symmetrize(points, left, right, midline=moved, uncertainty="jackknife").report.uncertainty
+    assert measured.probably_misplaced == "midline 3"
+    assert measured.mirror_error_relative["midline 3"] == pytest.approx(2 * off[moved[2]] / cow.diagonal, rel=0.25)
+
+
 def test_a_misplaced_landmark_among_too_few_is_not_named(cow):
     """With four pairs no pair has a fourth neighbour to measure its gap by: nothing is named, however far off."""
     left, right = cow.landmarks(4)
