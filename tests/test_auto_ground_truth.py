@@ -83,6 +83,26 @@ def test_a_swung_limb_left_asymmetric_by_a_map_of_space_is_restored_from_the_int
     assert errors[1] < 0.6 * errors[0] and errors[1] < 1.5 * errors[2]
 
 
+def test_when_the_intrinsic_start_fails_the_output_of_the_maps_stands_and_the_report_says_why(remeshed_cow,
+                                                                                               monkeypatch):
+    from filter_symblend.auto import rounds
+    from filter_symblend.errors import GeometryError
+
+    def fails(*args):
+        raise GeometryError("the intrinsic pairs fall\napart")
+
+    weights = synthetic.limb_weights(remeshed_cow.points, **synthetic.LIMBS["cow"])
+    deformed = synthetic.random_rigid(synthetic.articulate_limb(remeshed_cow.points, weights, 0.6), seed=7)
+    monkeypatch.setattr(rounds, "_intrinsic_first_output", fails)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SymblendWarning)  # nothing is said to rest on the intrinsic mirror
+        result = symmetrize(deformed, faces=remeshed_cow.faces, pairs="auto", mode="articulated")
+    tried = result.report.auto_pairs.intrinsic_start
+    assert tried["kept"] == "maps" and tried["failed"] == "the intrinsic pairs fall apart"
+    assert tried["because"].startswith("the rounds from the ") and "left a part asymmetric" in tried["because"]
+    assert tried["maps_asymmetry"] == result.report.auto_pairs.output_asymmetry
+
+
 def test_a_bend_in_articulated_mode_is_not_paired_twice(remeshed_cow):
     """Bent 0.6 rad, nothing is left asymmetric: the rounds from the map of space stand alone."""
     deformed = synthetic.random_rigid(synthetic.bend(remeshed_cow.points, 0.6), seed=7)

@@ -28,8 +28,8 @@ from ..core.geometry import reflection_across_plane
 from ..core.landmark_asymmetry import fit_mirror_plane
 from ..core.landmark_pairs import LandmarkPairs, check_landmarks
 from ..core.solve import SymmetrizationResult, scaled_progress, solve
-from ..errors import (DegenerateNeighbourhoodError, DisconnectedPairsError, GeometryError, SymblendWarning,
-                      SymmetryNotFoundError)
+from ..errors import (DegenerateNeighbourhoodError, DisconnectedPairsError, GeometryError, SymblendError,
+                      SymblendWarning, SymmetryNotFoundError)
 from ..parameters import CORE, options_of
 from .confidence import doubtful_map_warning, mirror_pairs
 from .config import DEFAULT, AutoConfig
@@ -157,14 +157,20 @@ def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: d
     if progress is not None:
         progress(100.0, f"a part left asymmetric ({auto.output_asymmetry_p99:.2%} of the diagonal): the rounds "
                         "again from the intrinsic start")
-    second = _paired(points, faces, options, "intrinsic", excluded, None, config)
+    why = {"because": f"the rounds from the {auto.mirror_map.map} left a part asymmetric (99th percentile "
+                      f"{auto.output_asymmetry_p99:.3g} of the diagonal)", "maps_asymmetry": auto.output_asymmetry}
+    try:
+        second = _paired(points, faces, options, "intrinsic", excluded, None, config)
+    except SymblendError as error:  # the maps' output stands; the report says why the other is missing
+        second, why["failed"] = None, " ".join(str(error).split())
     if second is None:
-        return _warned(first)
+        why.setdefault("failed", "the intrinsic mirror gave no pairs to solve (no spectrum, or no map that keeps "
+                                 "the heat kernel signatures)")
+        kept_auto = dataclasses.replace(auto, intrinsic_start={**why, "kept": "maps"})
+        return _warned(dataclasses.replace(first, report=first.report.replace(auto_pairs=kept_auto)))
     maps, intrinsic = auto.output_asymmetry, second.report.auto_pairs.output_asymmetry
     kept = second if intrinsic < maps else first
-    why = {"because": f"the rounds from the {auto.mirror_map.map} left a part asymmetric (99th percentile "
-                      f"{auto.output_asymmetry_p99:.3g} of the diagonal)",
-           "maps_asymmetry": maps, "intrinsic_asymmetry": intrinsic, "kept": "intrinsic" if kept is second else "maps"}
+    why.update(intrinsic_asymmetry=intrinsic, kept="intrinsic" if kept is second else "maps")
     said = kept.report.auto_pairs.warnings
     if kept is second:
         said = (PART_LEFT_WARNING.format(p99=auto.output_asymmetry_p99, maps=maps, intrinsic=intrinsic), *said)
