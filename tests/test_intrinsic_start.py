@@ -13,7 +13,7 @@ from filter_symblend.auto.config import DEFAULT
 from filter_symblend.testing import synthetic
 from filter_symblend.auto.intrinsic_start import (DESCRIPTOR_AGREEMENT, cannot_start, descriptor_disagreement,
                                                   intrinsic_start)
-from filter_symblend.auto.rounds import plane_asymmetry, surface_asymmetry
+from filter_symblend.auto.rounds import plane_distances, surface_asymmetry
 from filter_symblend.auto.surface import build_surface
 from filter_symblend.core.landmark_pairs import check_landmarks
 from filter_symblend.core.mirror_planes import surface_mirror_planes
@@ -35,7 +35,8 @@ def _start(points, faces):
             return solve(points, checked, {"mode": "articulated", "phi_width": 8.0, "theta_width": 5.0,
                                            "width_spacing": 0.0, "alpha": 0.01, "output_frame": "input"}, warn=False)
 
-    before = plane_asymmetry(surface, *surface_mirror_planes(points[sample])[0], sample)
+    distances = plane_distances(surface, *surface_mirror_planes(points[sample])[0], sample)
+    before = float(np.sqrt(np.mean(distances**2)))  # RMS, as surface_asymmetry measures an output
     result, tried = intrinsic_start(surface, DEFAULT, solve_pairs, lambda out: surface_asymmetry(surface, out, sample))
     return result, tried, before
 

@@ -76,11 +76,6 @@ def _output_map(surface: Surface, result: SymmetrizationResult, sample: np.ndarr
     return field_map(output, start, "output mirror field")
 
 
-def plane_asymmetry(surface: Surface, normal: np.ndarray, offset: float, sample: np.ndarray) -> float:
-    """RMS distance of the ``sample`` vertices of ``surface`` to its reflection across the plane, / diagonal."""
-    return float(np.sqrt(np.mean(_plane_distances(surface, normal, offset, sample)**2)))
-
-
 def surface_asymmetry(surface: Surface, result: SymmetrizationResult, sample: np.ndarray) -> float:
     """RMS distance of the ``sample`` vertices of the output to its reflection across its plane, / diagonal."""
     return output_asymmetry(surface, result, sample)[0]
@@ -89,12 +84,14 @@ def surface_asymmetry(surface: Surface, result: SymmetrizationResult, sample: np
 def output_asymmetry(surface: Surface, result: SymmetrizationResult, sample: np.ndarray) -> tuple[float, float]:
     """The RMS and the 99th percentile of the distances of the ``sample`` vertices of the output to its
     reflection across its plane, / diagonal."""
-    distances = _plane_distances(surface.moved(result.points), result.report.plane.normal,
+    distances = plane_distances(surface.moved(result.points), result.report.plane.normal,
                                  result.report.plane.offset, sample)
     return float(np.sqrt(np.mean(distances**2))), float(np.percentile(distances, 99))
 
 
-def _plane_distances(surface: Surface, normal: np.ndarray, offset: float, sample: np.ndarray) -> np.ndarray:
+def plane_distances(surface: Surface, normal: np.ndarray, offset: float, sample: np.ndarray) -> np.ndarray:
+    """(m,): distance of each of the ``sample`` vertices of ``surface`` to its reflection across the plane, /
+    diagonal."""
     mirrored = reflection_across_plane(surface.points[sample], np.asarray(normal), offset)
     return surface.nearest_points(mirrored)[1] / surface.diagonal
 
@@ -216,30 +213,28 @@ def _paired(points: np.ndarray, faces: np.ndarray, options: dict, start: Landmar
     registration = spread(points, surface.usable_index, config.registration_samples)
     origin = {}  # how the rounds started: the first map's coverage and plane, or the intrinsic start
     history, messages = [], []
-    if landmarks is None and start == "intrinsic":
-        result, tried = _intrinsic_first_output(points, surface, core, scored, config, None, progress)
-        if result is None:
-            return None
-        origin = {"intrinsic_start": tried}
-        best = surface_asymmetry(surface, result, scored)
-        history.append(Round(best, start="intrinsic"))
-        mirror = _output_map(surface, result, registration, config)
-    elif landmarks is None:
+    refusal = None  # no map of space mirrors enough of the surface (in articulated mode: the intrinsic start)
+    if landmarks is None and start == "maps":
         try:
             mirror, shares, plane = first_map(surface, scored, config, scaled_progress(progress, 0.0, 30.0))
             origin = {"coverage": shares, "surface_plane": plane}
             result, best = None, np.inf
-        except SymmetryNotFoundError as refusal:  # a strongly posed body, or a shape with no mirror symmetry
+        except SymmetryNotFoundError as refused:  # a strongly posed body, or a shape with no mirror symmetry
             if core["mode"] != "articulated":  # the intrinsic mirror holds under isometries: a pose, not a compression
-                raise _refusal_saying(refusal, "If it is a posed body, mode='articulated' pairs it by its intrinsic "
+                raise _refusal_saying(refused, "If it is a posed body, mode='articulated' pairs it by its intrinsic "
                                                "mirror.") from None
-            result, tried = _intrinsic_first_output(points, surface, core, scored, config, refusal, progress)
-            origin = {"intrinsic_start": tried}
-            best = surface_asymmetry(surface, result, scored)
-            history.append(Round(best, start="intrinsic"))
+            refusal = refused
+    if landmarks is None and (start == "intrinsic" or refusal is not None):
+        result, tried = _intrinsic_first_output(points, surface, core, scored, config, refusal, progress)
+        if result is None:  # only when asked for: after a refusal it raises
+            return None
+        origin = {"intrinsic_start": tried}
+        best = surface_asymmetry(surface, result, scored)
+        history.append(Round(best, start="intrinsic"))
+        if refusal is not None:
             messages.append(INTRINSIC_START_WARNING)
-            mirror = _output_map(surface, result, registration, config)
-    else:
+        mirror = _output_map(surface, result, registration, config)
+    elif landmarks is not None:
         result = solve(points, landmarks, core, scaled_progress(progress, 0.0, 20.0))
         best = surface_asymmetry(surface, result, scored)
         history.append(Round(best, start="landmarks"))

@@ -110,6 +110,12 @@ class LandmarkTargets:
     phi_h: float
     theta_h: float
 
+    @property
+    def plane(self) -> MirrorPlane:
+        """The restored symmetry's plane in the input frame: the canonical frame's x = 0 moved by the rigid map."""
+        normal = self.rotation[:, 0]
+        return MirrorPlane(normal, float(normal @ self.translation))
+
 
 def landmark_targets(points: np.ndarray, landmarks: LandmarkPairs, options: dict, progress=None,
                      warn: bool = False, clock: dict | None = None) -> LandmarkTargets:
@@ -200,10 +206,9 @@ def solve(points: np.ndarray, landmarks: LandmarkPairs, options: dict, progress=
         warped[unique] = solved
         if flat is not None:
             warped = _kept_flat(warped, warped, rotation.T @ flat)
-        normal, offset = np.array([1.0, 0.0, 0.0]), 0.0
+        plane = MirrorPlane(np.array([1.0, 0.0, 0.0]), 0.0)
     else:
-        normal = rotation[:, 0]
-        offset = float(normal @ translation)
+        plane = steps.plane
     clock["warp"] = time.perf_counter()
     _report_progress(progress, 100.0, "done")
 
@@ -214,7 +219,7 @@ def solve(points: np.ndarray, landmarks: LandmarkPairs, options: dict, progress=
         midline_count=int(len(landmarks.midline)),
         mode=options["mode"],
         output_frame=options["output_frame"],
-        plane=MirrorPlane(normal, offset),
+        plane=plane,
         canonical_from_input=np.block([[rotation.T, (-rotation.T @ translation)[:, None]],
                                        [np.zeros((1, 3)), np.ones((1, 1))]]),
         landmark_asymmetry_before=fit_mirror_plane(points[left], points[right]).summary(diagonal),

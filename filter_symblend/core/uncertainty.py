@@ -28,7 +28,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import GeometryError, SymblendError
-from .geometry import rigid_fit
+from .geometry import reflection_across_plane, rigid_fit
 from .landmark_pairs import LandmarkPairs, midline_labels
 from .report import UncertaintySummary
 from .solve import LandmarkTargets, landmark_targets
@@ -119,9 +119,8 @@ def _reduced_targets(points: np.ndarray, full: LandmarkTargets, reduced: Landmar
 
 def _mirror_gap(full: LandmarkTargets, positions: np.ndarray, first: int, second: int) -> float:
     """How far the landmarks at rows ``first`` and ``second`` of ``positions`` (k, 3), in the input frame, are
-    from mirror images about ``full``'s plane (the canonical frame's x = 0), mesh units."""
-    canonical = (positions[[first, second]] - full.translation) @ full.rotation
-    return float(np.linalg.norm(canonical[0] * [-1.0, 1.0, 1.0] - canonical[1]))
+    from mirror images about ``full``'s plane, mesh units."""
+    return float(np.linalg.norm(reflection_across_plane(positions[[first]], *full.plane)[0] - positions[second]))
 
 
 def jackknife(points: np.ndarray, landmarks: LandmarkPairs, options: dict, full: LandmarkTargets) -> Uncertainty:
