@@ -210,9 +210,18 @@ PARAMETERS: tuple[Parameter, ...] = (
         "restored vertex, mesh units) and the report `uncertainty` (its median, 90th percentile and max, each "
         "pair's influence: how far the result moves without it, and the most influential pair; each pair's "
         "mirror error: how far from mirroring the others' restoration leaves it, and a warning naming a pair "
-        "that stands out as probably misplaced). Landmark pairs only ('landmarks'), at least 3 of them. "
-        "'none': not computed.",
-        choices=("none", "jackknife"),
+        "that stands out as probably misplaced). 'placement': the same report, but `symblend_uncertainty` and "
+        "its figures are how far landmarks placed with RMS error `landmark_precision` move each restored vertex "
+        "(RMS over 100 random placements, mesh units): a band calibrated to your placement precision. Landmark "
+        "pairs only ('landmarks'), at least 3 of them. 'none': not computed.",
+        choices=("none", "jackknife", "placement"),
+    ),
+    Parameter(
+        "landmark_precision", "float", 0.0, "Landmark precision",
+        "With uncertainty='placement': how far a placed landmark lies from its true place along the surface, "
+        "as an RMS distance in mesh units (place a few landmarks several times and measure their scatter, "
+        "as for a study's measurement error). 0: not given.",
+        unit="mesh units", minimum=0.0, maximum=math.inf,
     ),
     Parameter(
         "output_frame", "enum", "input", "Output frame",

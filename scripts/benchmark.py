@@ -23,8 +23,9 @@ Seconds are the filter's own stage timings (median of --repeat runs).
                                              # self-symmetry of FAUST and TOSCA (BCICP dataset), pyFM beside it
     python scripts/benchmark.py --batch      # `symblend batch` on 16 specimens of about 30k vertices: 1 and 2
                                              # local workers, and a local Dask cluster
-    python scripts/benchmark.py --uncertainty [--quick]  # the jackknife: its cost through the MeshSet filter, its
-                                             # calibration against known landmark noise, a misplaced landmark
+    python scripts/benchmark.py --uncertainty [--quick]  # the jackknife and the placement band: their cost through
+                                             # the MeshSet filter, their calibration against known landmark
+                                             # noise, a misplaced landmark
     python scripts/benchmark.py --icp        # the mirror plane's reflection ICP, plain and Anderson-accelerated
     python scripts/benchmark_dense.py        # dense pairs: the stages, the warp against the dense spline
 
@@ -56,11 +57,11 @@ def main(argv=None) -> None:
     parser.add_argument("--filter", action="store_true", help="the MeshSet filter against its core; symblend report")
     parser.add_argument("--batch", action="store_true", help="symblend batch: 1 and 2 workers, a local Dask cluster")
     parser.add_argument("--icp", action="store_true", help="the mirror plane's reflection ICP, plain and accelerated")
-    parser.add_argument("--uncertainty", action="store_true", help="the jackknife: cost, calibration, detection")
+    parser.add_argument("--uncertainty", action="store_true", help="the jackknife and the placement band: cost, calibration, detection")
     parser.add_argument("--mirror-maps", action="store_true",
                         help="the mirror map against the BCICP dataset's ground-truth self-symmetry")
     parser.add_argument("--quick", action="store_true",
-                        help="--mirror-maps: six shapes (about 2 minutes); --uncertainty: 6 sets a cell, not 12")
+                        help="--mirror-maps: six shapes (about 2 minutes); --uncertainty: 6 sets a cell, not 12 (4 draws, not 10)")
     parser.add_argument("--all-shapes", action="store_true", help="--mirror-maps: every FAUST and TOSCA shape")
     parser.add_argument("--shapes", nargs="+", help="--mirror-maps: these shapes only (e.g. tr_reg_088 cat4)")
     parser.add_argument("--bcicp", help="--mirror-maps: the dataset (a git snapshot or an unpacked copy)")

@@ -219,6 +219,10 @@ def test_the_hand_written_spline_equals_scipys_rbf_interpolator():
     ours = splines.ThinPlateSpline(centres, values)(points, progress.append)
     np.testing.assert_allclose(ours, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
     assert progress[-1] == 1.0 and all(b - a >= 0.05 for a, b in zip(progress, progress[1:-1]))
+    few = points[[0, 3000, 3007]]  # a few points (a centre, within 1e-9 of one, another centre): computed directly
+    assert len(few) * len(centres) <= splines.DIRECT_ELEMENTS
+    np.testing.assert_allclose(splines.ThinPlateSpline(centres, values)(few), expected[[0, 3000, 3007]], rtol=0,
+                               atol=1e-9 * np.abs(expected).max())
 
 
 def test_the_approximate_spline_stays_close_to_the_exact_one_on_a_smooth_map(monkeypatch):

@@ -172,7 +172,7 @@ def test_errors_name_the_problem_and_the_fix(cow, monkeypatch):
     with pytest.raises(ParameterError, match=r"needs at least 3 of them; there are 2\. Add landmarks, or use "
                                              r"uncertainty='none'\."):
         symmetrize(drawing, [0, 1], [2, 3], uncertainty="jackknife")  # a flat drawing: two pairs are enough
-    with pytest.raises(ParameterError, match=r"`uncertainty` must be one of 'none', 'jackknife', got 'bootstrap'"):
+    with pytest.raises(ParameterError, match=r"`uncertainty` must be one of 'none', 'jackknife', 'placement', got 'bootstrap'"):
         symmetrize(cow.points, left, right, uncertainty="bootstrap")
     full_solve = uncertainty.landmark_targets
 

@@ -118,7 +118,7 @@ def _from_saved(saved: dict, points) -> dict:
     figures = {key: f"{saved[key]['rms_relative']:.6g}" for key in ASYMMETRY_FIELDS if key in saved}
     if "auto_pairs" in saved:  # the share of the surface whose automatic twin is confident
         figures["confident_share"] = f"{saved['auto_pairs']['mirror_map']['confident_share']:.3g}"
-    if "uncertainty" in saved:  # the jackknife's 90th percentile (relative) and the pair that moves it most
+    if "uncertainty" in saved:  # the spread's 90th percentile (relative) and the pair that moves it most
         figures["uncertainty_p90"] = f"{saved['uncertainty']['p90_relative']:.6g}"
         figures["most_influential_pair"] = landmark_name(saved["uncertainty"]["most_influential_pair"],
                                                          saved.get("landmarks"))

@@ -77,7 +77,7 @@ def run(args) -> int:
 
             meshes = [dict(result[key], points=ms.mesh(mesh_id).vertex_matrix(), faces=ms.mesh(mesh_id).face_matrix())
                       for key, mesh_id in (("mirror_asymmetry_before", before_id), ("mirror_asymmetry_after", after_id))]
-            spread = optional_attribute(after_mesh, UNCERTAINTY_ATTRIBUTE)  # a jackknife's output shows it
+            spread = optional_attribute(after_mesh, UNCERTAINTY_ATTRIBUTE)  # an output with uncertainty shows it
             uncertainty = None if spread is None else {
                 "per_vertex": spread, "p90_relative": float(np.percentile(spread, 90)) / before_mesh.bounding_box().diagonal()}
             result["png_views"] = render_comparison(picture_file, *meshes, titles=(args.before.name, args.after.name),

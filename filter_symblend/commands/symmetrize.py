@@ -114,7 +114,9 @@ def uncertainty_line(uncertainty: UncertaintySummary, landmarks: dict | None) ->
     """One line of the report's ``uncertainty``: the most influential pair, and the probably misplaced one, by
     their landmark names."""
     top, misplaced = uncertainty.most_influential_pair, uncertainty.probably_misplaced
-    line = (f"uncertainty (jackknife, {uncertainty.left_out} landmarks left out in turn): median "
+    spread = (f"jackknife, {uncertainty.left_out} landmarks left out in turn" if uncertainty.method == "jackknife"
+              else f"placement error of {uncertainty.landmark_precision:.4g} RMS, 100 random placements")
+    line = (f"uncertainty ({spread}): median "
             f"{uncertainty.median_relative:.3%}, p90 {uncertainty.p90_relative:.3%}, max "
             f"{uncertainty.max_relative:.3%} of the diagonal; most influential: {landmark_name(top, landmarks)} "
             f"(the result moves up to {uncertainty.influence_relative[top]:.3%} without it)")

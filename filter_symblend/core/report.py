@@ -112,8 +112,10 @@ class Timings:
 
 @dataclasses.dataclass(frozen=True)
 class UncertaintySummary:
-    """The jackknife (core/uncertainty), relative to the diagonal: the spread's ``median``, ``p90`` and
-    ``max``; each left-out unit's ``influence`` (label -> how far the result moves without it), the
+    """How sure the restoration is (core/uncertainty, core/placement), relative to the diagonal: the
+    per-vertex spread's ``median``, ``p90`` and ``max`` (``method`` 'jackknife': its standard error;
+    'placement': the RMS change that landmarks placed with RMS error ``landmark_precision``, mesh units, cause);
+    each left-out unit's ``influence`` (label -> how far the result moves without it), the
     ``most_influential_pair``, the units ``kept_in`` (label -> why they cannot be left out); each unit's
     ``mirror_error`` (label -> how far from mirroring the restoration by the others leaves it), the unit
     that is ``probably_misplaced`` (or None) and the ``warnings`` that say so."""
@@ -128,9 +130,11 @@ class UncertaintySummary:
     mirror_error_relative: dict[str, float]
     probably_misplaced: str | None = None
     warnings: tuple[str, ...] = ()
+    method: str = "jackknife"
+    landmark_precision: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        return {"method": "jackknife", **dataclasses.asdict(self), "warnings": list(self.warnings)}
+        return {**dataclasses.asdict(self), "warnings": list(self.warnings)}
 
 
 @dataclasses.dataclass(frozen=True)

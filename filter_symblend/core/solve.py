@@ -40,7 +40,8 @@ class SymmetrizationResult:
     mirror_pairs: with automatic pairs, the mirror map they came from (every vertex's twin, with its
     confidence); None with landmark pairs alone.
     uncertainty (N,): with ``uncertainty='jackknife'``, the jackknife standard error of each restored
-    vertex, mesh units (core/uncertainty); else None.
+    vertex (core/uncertainty); with 'placement', its RMS change under the landmarks' placement error
+    (core/placement); mesh units; else None.
     """
 
     points: np.ndarray

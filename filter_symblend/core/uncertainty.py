@@ -70,10 +70,11 @@ class Uncertainty:
         stands_out = scaled[worst] > MISPLACED_RATIO * np.median(scaled)
         return worst if stands_out and self.mirror_error[worst] >= MISPLACED_ERROR * diagonal else None
 
-    def summary(self, diagonal: float) -> UncertaintySummary:
+    def summary(self, diagonal: float, method: str = "jackknife",
+                landmark_precision: float | None = None) -> UncertaintySummary:
         """The report's part: the spread's median, 90th percentile and max, each unit's influence and mirror
         error, relative to ``diagonal``, the most influential unit, and the probably misplaced one with its
-        warning."""
+        warning; ``method`` and ``landmark_precision`` say what ``per_vertex`` is (core/placement)."""
         p50, p90 = np.percentile(self.per_vertex, [50, 90])
         misplaced = self.probably_misplaced(diagonal)
         warnings = () if misplaced is None else (_misplaced_warning(self.units[misplaced],
@@ -83,7 +84,8 @@ class Uncertainty:
                                   {unit: float(value / diagonal) for unit, value in zip(self.units, self.influence)},
                                   self.units[int(np.argmax(self.influence))], dict(self.kept_in),
                                   {unit: float(value / diagonal) for unit, value in zip(self.units, self.mirror_error)},
-                                  None if misplaced is None else self.units[misplaced], warnings)
+                                  None if misplaced is None else self.units[misplaced], warnings, method,
+                                  landmark_precision)
 
 
 def _misplaced_warning(unit: str, error: float, diagonal: float) -> str:
@@ -153,18 +155,26 @@ def jackknife(points: np.ndarray, landmarks: LandmarkPairs, options: dict, full:
                             "'none'.")
     total, squares = np.zeros((len(points), 3)), np.zeros(len(points))
     influence = np.zeros(count)
-    centres = points[full.vertices]
-    group = max(1, EVALUATED_VALUES // (3 * len(points)))
-    for start in range(0, count, group):
-        block = np.stack(changes[start:start + group], axis=1)  # (k, g, 3)
-        moved = _spline_values(centres, block, full.flat, points)
-        moved[full.vertices] = block  # the landmarks' own changes, exactly
+    for start, moved in changes_everywhere(points, full.vertices, np.stack(changes, axis=1), full.flat):
         total += moved.sum(axis=1)
         distances = np.linalg.norm(moved, axis=2)
         squares += (distances**2).sum(axis=1)
-        influence[start:start + group] = distances.max(axis=0)
+        influence[start:start + moved.shape[1]] = distances.max(axis=0)
     spread = np.sqrt(np.maximum((count - 1) / count * (squares - (total**2).sum(axis=1) / count), 0.0))
     return Uncertainty(spread, influence, np.array(mirror_error), np.array(positions), left_out, kept_in)
+
+
+def changes_everywhere(points: np.ndarray, vertices: np.ndarray, changes: np.ndarray, flat: np.ndarray | None):
+    """Yield ``(start, moved)``: ``moved`` (N, g, 3) the splines through columns ``start:start + g`` of
+    ``changes`` (k, G, 3), the changes of the targets of the landmark ``vertices`` (k,), at all ``points``
+    (N, 3) (at the landmarks their own changes, exactly); g columns at a time, ``EVALUATED_VALUES`` values."""
+    group = max(1, EVALUATED_VALUES // (3 * len(points)))
+    centres = points[vertices]
+    for start in range(0, changes.shape[1], group):
+        block = changes[:, start:start + group]
+        moved = _spline_values(centres, block, flat, points)
+        moved[vertices] = block
+        yield start, moved
 
 
 def _spline_values(centres: np.ndarray, changes: np.ndarray, flat: np.ndarray | None, points: np.ndarray) -> np.ndarray:

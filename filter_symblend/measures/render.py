@@ -60,7 +60,7 @@ def render_comparison(path, before: dict, after: dict, titles=("before", "after"
 
     ``before`` and ``after`` hold ``points`` (N, 3), ``faces`` (F, 3), ``per_vertex`` (N,)
     asymmetry, ``plane_normal`` (3,), and the summary's ``p90_relative`` and ``rms``; ``uncertainty``
-    holds ``per_vertex`` (N,) (the jackknife's standard error, mesh units) and ``p90_relative``.
+    holds ``per_vertex`` (N,) (``symblend_uncertainty``, mesh units) and ``p90_relative``.
     Returns each view's title and the unit vector (3,) it looks along, in the meshes' frame.
     """
     try:
@@ -96,7 +96,7 @@ def render_comparison(path, before: dict, after: dict, titles=("before", "after"
                                       fontsize=9, wrap=True)
         bar = figure.colorbar(matplotlib.cm.ScalarMappable(spread, heat), ax=axes[2], shrink=0.6,
                               orientation="horizontal")
-        bar.set_label("uncertainty: jackknife standard error of each restored vertex (mesh units)")
+        bar.set_label("uncertainty: spread of each restored vertex, symblend_uncertainty (mesh units)")
     figure.savefig(path, dpi=100)
     plt.close(figure)
     return [(view, frame[view_axis].tolist()) for view, view_axis in VIEWS]

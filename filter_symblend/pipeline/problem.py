@@ -81,6 +81,13 @@ def build_problem(points, options: dict, landmarks: LandmarkPairs | None = None,
 
 def _check_uncertainty(options: dict, landmarks) -> None:
     """ParameterError if ``uncertainty`` cannot be measured for these pairs."""
+    placement = options["uncertainty"] == "placement"
+    if placement != (options["landmark_precision"] > 0):
+        raise ParameterError("`uncertainty='placement'` needs `landmark_precision`: how far a placed landmark lies "
+                             "from its true place, an RMS distance in mesh units (place a few landmarks several "
+                             "times and measure their scatter)." if placement else
+                             f"`landmark_precision` ({options['landmark_precision']:g}) is used only by "
+                             "uncertainty='placement'; set that, or leave `landmark_precision` at 0.")
     if options["uncertainty"] == "none":
         return
     if options["pairs"] != "landmarks":

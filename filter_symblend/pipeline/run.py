@@ -13,6 +13,7 @@ from ..auto import solve_with_automatic_pairs
 from ..core.mirror_fill import fill_from_mirror
 from ..core.geometry import MirrorPlane
 from ..core.solve import SymmetrizationResult, landmark_targets, scaled_progress, solve
+from ..core.placement import placement_spread
 from ..core.uncertainty import jackknife
 from ..errors import SymblendWarning
 from ..parameters import CORE, options_of
@@ -35,14 +36,17 @@ def _filled(result: SymmetrizationResult, points, faces, missing: MissingRegion,
 
 
 def _with_uncertainty(result: SymmetrizationResult, problem: Problem, core: dict, progress) -> SymmetrizationResult:
-    """``result`` with the jackknife of its landmarks (core/uncertainty): per-vertex values and the report's
-    ``uncertainty``."""
+    """``result`` with the jackknife of its landmarks (core/uncertainty) and, with 'placement', the spread
+    their placement error causes (core/placement): per-vertex values and the report's ``uncertainty``."""
     if progress is not None:
         progress(70.0, f"uncertainty: each of {len(problem.landmarks.left) + len(problem.landmarks.midline)} "
                        "landmarks left out in turn")
     full = landmark_targets(problem.points, problem.landmarks, core)
     measured = jackknife(problem.points, problem.landmarks, core, full)
-    summary = measured.summary(result.report.diagonal)
+    if core["uncertainty"] == "placement":
+        measured = dataclasses.replace(measured, per_vertex=placement_spread(
+            problem.points, problem.faces, problem.landmarks, core, full, core["landmark_precision"]))
+    summary = measured.summary(result.report.diagonal, core["uncertainty"], core["landmark_precision"] or None)
     for message in summary.warnings:
         warnings.warn(message, SymblendWarning, stacklevel=4)
     if progress is not None:
@@ -63,7 +67,7 @@ def solve_problem(problem: Problem, progress=None) -> SymmetrizationResult:
         core = options_of(options, CORE)
         result = solve(problem.points, problem.landmarks, core, scaled_progress(progress, 0.0, 70.0)
                        if options["uncertainty"] != "none" else progress)
-        if options["uncertainty"] == "jackknife":
+        if options["uncertainty"] != "none":
             result = _with_uncertainty(result, problem, core, progress)
     else:
         result = solve_with_automatic_pairs(problem.points, problem.faces, options, problem.landmarks,

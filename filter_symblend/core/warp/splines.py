@@ -44,6 +44,7 @@ from ..parallel import WORKERS, in_threads
 
 BLOCK_ELEMENTS = 2**17  # distances per evaluation block (1 MB of float64; measured fastest of 2^15..2^22)
 CHUNK_ROWS = 2**14  # vertices per task of the thread pool (fewer when that leaves a core idle)
+DIRECT_ELEMENTS = 2**14  # at most this many distances (a few points): computed directly, no blocks, no threads
 NEAR = 1e-4  # vertices closer than this to a landmark (fraction of their extent) are evaluated exactly
 ROUNDING = 64 * np.finfo(float).eps  # keeps expanded squared distances non-negative
 SUBSET_CENTRES = 6_000  # landmarks of the approximation's global part (fewer: measured worse)
@@ -153,6 +154,11 @@ class ThinPlateSpline:
     def _evaluate(self, x: np.ndarray, progress, parallel: bool) -> np.ndarray:
         """Values (m, d) at ``x`` (m, 3) in the spline's scaled coordinates."""
         out = self._polynomial_part(x)
+        if len(x) * len(self._centres) <= DIRECT_ELEMENTS:  # a few points: their distances directly, exact
+            out -= cdist(x, self._centres) @ self._weights
+            if progress is not None:
+                progress(1.0)
+            return out
         augmented = self._augmented(x)
         rows = max(1, BLOCK_ELEMENTS // len(self._centres))
         chunk = int(min(CHUNK_ROWS, max(rows, -(-len(x) // (2 * WORKERS)))))  # two tasks per core at least
