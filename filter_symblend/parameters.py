@@ -205,7 +205,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter(
         "uncertainty", "enum", "none", "Uncertainty",
         "How sure the restoration is. 'jackknife': each landmark pair and midline landmark is left out in turn "
-        "and the restoration repeated (Steps 1 and 2 again; the warp of every repetition in one evaluation); "
+        "(beyond 100 of them, in 100 random groups) and the restoration repeated (Steps 1 and 2 again; the warp of every repetition in one evaluation); "
         "the output gets the per-vertex attribute `symblend_uncertainty` (the jackknife standard error of each "
         "restored vertex, mesh units) and the report `uncertainty` (its median, 90th percentile and max, each "
         "pair's influence: how far the result moves without it, and the most influential pair; each pair's "

@@ -119,6 +119,63 @@ def test_a_landmark_far_off_its_place_is_named_as_probably_misplaced(cow):
     assert warned <= 1
 
 
+def test_many_units_are_left_out_in_groups_equal_to_the_slow_delete_a_group_jackknife(cow, monkeypatch):
+    """18 pairs and 2 midline landmarks with at most 6 groups: the units are left out 3-4 at a time, each group's
+    restoration computed in full by ``symmetrize`` without it; the spread, each unit's influence (its group's)
+    and mirror error (from its group's restoration) equal the slow ones."""
+    monkeypatch.setattr(uncertainty, "JACKKNIFE_GROUPS", 6)
+    points = synthetic.bend(cow.points, 0.4)
+    left, right = cow.landmarks(18)
+    midline = np.flatnonzero(np.abs(cow.points[:, 0] - cow.offset) < 1e-9)[[0, -1]]
+    result = symmetrize(points, left, right, midline=midline, uncertainty="jackknife")
+    full = symmetrize(points, left, right, midline=midline)
+    spacing = full.report.widths.width_spacing
+    normal, offset = full.report.plane.normal, full.report.plane.offset
+    groups = uncertainty.left_out_groups(20)
+    assert len(groups) == 6 and sorted(np.concatenate(groups)) == list(range(20))
+    moved, influence, mirror_error = [], {}, {}
+    for group in groups:
+        keep, kept_midline = ~np.isin(np.arange(18), group), ~np.isin(np.arange(18, 20), group)
+        out = symmetrize(points, left[keep], right[keep], midline=midline[kept_midline], width_spacing=spacing).points
+        common = np.concatenate([left[keep], right[keep], midline[kept_midline]])
+        rotation, translation = rigid_fit(out[common], full.points[common])
+        out = out @ rotation.T + translation
+        moved.append(out - full.points)
+        for unit in group:
+            first, second = (left[unit], right[unit]) if unit < 18 else (midline[unit - 18],) * 2
+            label = str(unit + 1) if unit < 18 else f"midline {unit - 17}"
+            mirrored = out[first] - 2 * (out[first] @ normal - offset) * normal
+            mirror_error[label] = np.linalg.norm(mirrored - out[second]) / result.report.diagonal
+            influence[label] = np.linalg.norm(moved[-1], axis=1).max() / result.report.diagonal
+    moved = np.stack(moved, axis=1)
+    centred = moved - moved.mean(axis=1, keepdims=True)
+    spread = np.sqrt(5 / 6 * (centred**2).sum(axis=(1, 2)))
+    np.testing.assert_allclose(result.uncertainty, spread, atol=1e-7 * result.report.diagonal)
+    measured = result.report.uncertainty
+    assert measured.groups == 6 and measured.left_out == 20 and set(measured.influence_relative) == set(influence)
+    for label in influence:
+        assert measured.influence_relative[label] == pytest.approx(influence[label], abs=1e-7)
+        assert measured.mirror_error_relative[label] == pytest.approx(mirror_error[label], abs=1e-7)
+    top = max(influence.values())
+    group_of_top = [label for label in influence if influence[label] == pytest.approx(top, abs=1e-9)]
+    assert measured.most_influential_pair == max(group_of_top, key=mirror_error.get)
+
+
+def test_a_landmark_far_off_among_300_pairs_left_out_in_groups_is_named(cow):
+    """300 pairs (100 groups of 3), one right landmark moved 10 % of the diagonal: named, and the command's line
+    says the groups."""
+    from filter_symblend.commands.symmetrize import uncertainty_line
+    points = synthetic.bend(cow.points, 0.3)
+    left, right = cow.landmarks(300)
+    distance = np.linalg.norm(cow.points - cow.points[right[41]], axis=1)
+    right[41] = np.argmin(np.abs(distance - 0.10 * cow.diagonal) + np.isin(np.arange(len(cow.points)), [*left, *right]))
+    with pytest.warns(SymblendWarning, match=r"Landmark pair 42 is probably misplaced"):
+        measured = symmetrize(points, left, right, uncertainty="jackknife").report.uncertainty
+    assert measured.probably_misplaced == "42" and measured.groups == 100 and measured.left_out == 300
+    assert uncertainty_line(measured, None).startswith("uncertainty (jackknife, 300 landmarks left out in 100 random "
+                                                       "groups): median ")
+
+
 def test_a_midline_landmark_off_the_plane_is_named_by_twice_its_distance_from_it(cow):
     """Eight midline landmarks on the cow's plane among 40 pairs: none named. The third moved to a vertex about
     10 % of the diagonal away and off the plane by d: its mirror image is 2 d away, and it is named."""

@@ -114,7 +114,9 @@ def uncertainty_line(uncertainty: UncertaintySummary, landmarks: dict | None) ->
     """One line of the report's ``uncertainty``: the most influential pair, and the probably misplaced one, by
     their landmark names."""
     top, misplaced = uncertainty.most_influential_pair, uncertainty.probably_misplaced
-    spread = (f"jackknife, {uncertainty.left_out} landmarks left out in turn" if uncertainty.method == "jackknife"
+    turns = ("in turn" if uncertainty.groups in (None, uncertainty.left_out)
+             else f"in {uncertainty.groups} random groups")
+    spread = (f"jackknife, {uncertainty.left_out} landmarks left out {turns}" if uncertainty.method == "jackknife"
               else f"placement error of {uncertainty.landmark_precision:.4g} RMS, 100 random placements")
     line = (f"uncertainty ({spread}): median "
             f"{uncertainty.median_relative:.3%}, p90 {uncertainty.p90_relative:.3%}, max "

@@ -115,7 +115,8 @@ class UncertaintySummary:
     """How sure the restoration is (core/uncertainty, core/placement), relative to the diagonal: the
     per-vertex spread's ``median``, ``p90`` and ``max`` (``method`` 'jackknife': its standard error;
     'placement': the RMS change that landmarks placed with RMS error ``landmark_precision``, mesh units, cause);
-    each left-out unit's ``influence`` (label -> how far the result moves without it), the
+    each left-out unit's ``influence`` (label -> how far the result moves without it, or without its group:
+    beyond 100 units they are left out in ``groups`` random groups), the
     ``most_influential_pair``, the units ``kept_in`` (label -> why they cannot be left out); each unit's
     ``mirror_error`` (label -> how far from mirroring the restoration by the others leaves it), the unit
     that is ``probably_misplaced`` (or None) and the ``warnings`` that say so."""
@@ -132,6 +133,7 @@ class UncertaintySummary:
     warnings: tuple[str, ...] = ()
     method: str = "jackknife"
     landmark_precision: float | None = None
+    groups: int | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {**dataclasses.asdict(self), "warnings": list(self.warnings)}

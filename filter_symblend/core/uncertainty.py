@@ -8,9 +8,12 @@ values that are themselves a thin-plate spline of fewer centres is that spline, 
 the full spline's warp plus the spline of the target changes ``delta_j`` at the same centres, and one spline
 with all the ``delta_j`` as columns gives every vertex's change for every j in one evaluation.
 
+Beyond ``JACKKNIFE_GROUPS`` units they are left out in that many random groups instead (the delete-a-group
+jackknife; each unit's mirror error then comes from the restoration without its group, a k-fold cross-validation).
 Per vertex, the jackknife standard error of its restored position (mesh units),
-``sqrt((J - 1) / J * sum_j |d_j(x) - mean_j d_j(x)|^2)``; per unit, its influence (the largest distance
-any vertex moves without it) and its cross-validated mirror error: how far from mirror images the
+``sqrt((G - 1) / G * sum_g |d_g(x) - mean_g d_g(x)|^2)`` over the G groups (each unit alone: G = J); per
+unit, its influence (the largest distance any vertex moves without it, or its group; the most influential of a
+group is its unit with the largest mirror error) and its cross-validated mirror error: how far from mirror images the
 restoration by the others leaves its two landmarks (a midline landmark: from its own mirror image), about
 the full solve's plane. A landmark slipped by s lies about s from where the others put it; a sound one
 lies as far as the others can predict it, which grows with the gap to its neighbours. So the error, over
@@ -42,15 +45,20 @@ MISPLACED_RATIO = 25.0
 MISPLACED_NEIGHBOUR = 4  # ... the gap: to the fourth-nearest unit (tried 1-4 and 6: the 2nd and 3rd warned as rarely
 # but named fewer slips, the 1st named fewer still, the 6th warned more)
 MISPLACED_ERROR = 0.01  # ... and the error is at least this share of the diagonal: a hand's placement precision
+# Beyond this many units (pairs and midline landmarks) they are left out in this many random groups (the
+# delete-a-group jackknife): each left-out solve costs more with more pairs, and one by one the cost grows as
+# their square (600 pairs on the 2,904-vertex cow: 28 s one by one).
+JACKKNIFE_GROUPS = 100
+GROUPS_SEED = 0  # the groups are the same on every call: the same input gives the same output
 
 
 @dataclasses.dataclass(frozen=True)
 class Uncertainty:
     """``per_vertex`` (N,): jackknife standard error of each restored vertex, mesh units; ``influence``
-    (J,): the largest distance a vertex moves when unit j is left out, mesh units; ``mirror_error`` (J,):
-    its cross-validated mirror error, mesh units; ``positions`` (J, 3): where each unit is (a pair's
-    midpoint); ``units`` (J >= 2,): their labels (pair ids, ``midline k``); ``kept_in``: units that cannot be
-    left out, with why."""
+    (J,): the largest distance a vertex moves when unit j is left out (with its group), mesh units;
+    ``mirror_error`` (J,): its cross-validated mirror error, mesh units; ``positions`` (J, 3): where each unit
+    is (a pair's midpoint); ``units`` (J >= 2,): their labels (pair ids, ``midline k``); ``kept_in``: units that
+    cannot be left out, with why; ``groups``: how many groups they were left out in (J when one by one)."""
 
     per_vertex: np.ndarray
     influence: np.ndarray
@@ -58,6 +66,7 @@ class Uncertainty:
     positions: np.ndarray
     units: list[str]
     kept_in: dict[str, str]
+    groups: int
 
     def probably_misplaced(self, diagonal: float) -> int | None:
         """The index of the unit whose mirror error stands out (see the module doc), or None; needs more
@@ -82,10 +91,11 @@ class Uncertainty:
         return UncertaintySummary(len(self.units), float(p50 / diagonal), float(p90 / diagonal),
                                   float(self.per_vertex.max() / diagonal),
                                   {unit: float(value / diagonal) for unit, value in zip(self.units, self.influence)},
-                                  self.units[int(np.argmax(self.influence))], dict(self.kept_in),
+                                  self.units[int(np.lexsort((self.mirror_error, self.influence))[-1])],
+                                  dict(self.kept_in),
                                   {unit: float(value / diagonal) for unit, value in zip(self.units, self.mirror_error)},
                                   None if misplaced is None else self.units[misplaced], warnings, method,
-                                  landmark_precision)
+                                  landmark_precision, self.groups)
 
 
 def _misplaced_warning(unit: str, error: float, diagonal: float) -> str:
@@ -96,11 +106,22 @@ def _misplaced_warning(unit: str, error: float, diagonal: float) -> str:
             f"(report: uncertainty.mirror_error_relative). Check where it was placed, or leave it out.")
 
 
-def _without(landmarks: LandmarkPairs, pair: int | None, midline: int | None) -> LandmarkPairs:
-    keep = np.arange(len(landmarks.left)) != pair
+def _without(landmarks: LandmarkPairs, pairs: np.ndarray, midline: np.ndarray) -> LandmarkPairs:
+    """``landmarks`` without the pairs at indices ``pairs`` and the midline landmarks at indices ``midline``."""
+    keep = np.ones(len(landmarks.left), dtype=bool)
+    keep[pairs] = False
     return LandmarkPairs(landmarks.ids[keep], landmarks.left[keep], landmarks.right[keep],
-                         np.delete(landmarks.midline, [] if midline is None else [midline]),
-                         landmarks.left_weights[keep], landmarks.right_weights[keep])
+                         np.delete(landmarks.midline, midline), landmarks.left_weights[keep],
+                         landmarks.right_weights[keep])
+
+
+def left_out_groups(units: int) -> list[np.ndarray]:
+    """The groups of unit indices (pairs first, then midline landmarks) left out together: each unit alone,
+    or beyond ``JACKKNIFE_GROUPS`` units that many random groups (seeded: the same on every call)."""
+    if units <= JACKKNIFE_GROUPS:
+        return [np.array([unit]) for unit in range(units)]
+    order = np.random.default_rng(GROUPS_SEED).permutation(units)
+    return [np.sort(group) for group in np.array_split(order, JACKKNIFE_GROUPS)]
 
 
 def _reduced_targets(points: np.ndarray, full: LandmarkTargets, reduced: LandmarkTargets) -> np.ndarray:
@@ -128,28 +149,30 @@ def _mirror_gap(full: LandmarkTargets, positions: np.ndarray, first: int, second
 def jackknife(points: np.ndarray, landmarks: LandmarkPairs, options: dict, full: LandmarkTargets) -> Uncertainty:
     """The jackknife of the restoration of ``points`` (N, 3) from checked ``landmarks`` with core
     ``options``, whose full Steps 1 and 2 are ``full``; see the module doc."""
-    labels = [str(i) for i in landmarks.ids] + list(midline_labels(len(landmarks.midline)))
-    units = [(index, None) for index in range(len(landmarks.left))]
-    units += [(None, index) for index in range(len(landmarks.midline))]
-    fixed = {**options, "width_spacing": full.spacing}  # the widths of the full solve: only the data vary
     pairs = len(landmarks.left)
-    changes, mirror_error, positions, left_out, kept_in = [], [], [], [], {}
-    for label, (pair, midline) in zip(labels, units):
+    labels = [str(i) for i in landmarks.ids] + list(midline_labels(len(landmarks.midline)))
+    fixed = {**options, "width_spacing": full.spacing}  # the widths of the full solve: only the data vary
+    changes, group_of, mirror_error, positions, left_out, kept_in = [], [], [], [], [], {}
+    for group in left_out_groups(len(labels)):
         try:
-            reduced = landmark_targets(points, _without(landmarks, pair, midline), fixed)
+            reduced = landmark_targets(points, _without(landmarks, group[group < pairs], group[group >= pairs] - pairs),
+                                       fixed)
         except SymblendError as error:  # e.g. the pairs fall apart without it
-            kept_in[label] = str(error)
+            kept_in.update({labels[unit]: str(error) for unit in group})
             continue
         targets = _reduced_targets(points, full, reduced)
-        rows = (pair, pairs + pair) if midline is None else (2 * pairs + midline,) * 2  # full.vertices' order
+        for unit in group:
+            # full.vertices' order: left sides, right sides, midline
+            rows = (unit, pairs + unit) if unit < pairs else (pairs + unit,) * 2
+            mirror_error.append(_mirror_gap(full, targets, *rows))
+            positions.append(points[full.vertices[list(rows)]].mean(axis=0))
+            left_out.append(labels[unit])
+            group_of.append(len(changes))
         changes.append(targets - full.target)
-        mirror_error.append(_mirror_gap(full, targets, *rows))
-        positions.append(points[full.vertices[list(rows)]].mean(axis=0))
-        left_out.append(label)
     count = len(changes)
     if count < 2:
         first, reason = next(iter(kept_in.items()))
-        unit = f"pair {first}" if first in labels[:len(landmarks.left)] else first
+        unit = f"pair {first}" if first in labels[:pairs] else first
         raise GeometryError(f"The jackknife needs two landmark pairs or midline landmarks that can be left out, and "
                             f"{count} can (without {unit}: {reason}). Add landmarks, or leave `uncertainty` at "
                             "'none'.")
@@ -161,7 +184,8 @@ def jackknife(points: np.ndarray, landmarks: LandmarkPairs, options: dict, full:
         squares += (distances**2).sum(axis=1)
         influence[start:start + moved.shape[1]] = distances.max(axis=0)
     spread = np.sqrt(np.maximum((count - 1) / count * (squares - (total**2).sum(axis=1) / count), 0.0))
-    return Uncertainty(spread, influence, np.array(mirror_error), np.array(positions), left_out, kept_in)
+    return Uncertainty(spread, influence[group_of], np.array(mirror_error), np.array(positions), left_out, kept_in,
+                       count)
 
 
 def changes_everywhere(points: np.ndarray, vertices: np.ndarray, changes: np.ndarray, flat: np.ndarray | None):

@@ -39,8 +39,8 @@ def _with_uncertainty(result: SymmetrizationResult, problem: Problem, core: dict
     """``result`` with the jackknife of its landmarks (core/uncertainty) and, with 'placement', the spread
     their placement error causes (core/placement): per-vertex values and the report's ``uncertainty``."""
     if progress is not None:
-        progress(70.0, f"uncertainty: each of {len(problem.landmarks.left) + len(problem.landmarks.midline)} "
-                       "landmarks left out in turn")
+        progress(70.0, f"uncertainty: {len(problem.landmarks.left) + len(problem.landmarks.midline)} landmarks "
+                       "left out in turn")
     full = landmark_targets(problem.points, problem.landmarks, core)
     measured = jackknife(problem.points, problem.landmarks, core, full)
     if core["uncertainty"] == "placement":
