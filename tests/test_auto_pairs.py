@@ -509,3 +509,52 @@ def test_the_igea_scan_is_made_symmetric_without_moving_more_than_its_asymmetry(
     print("90th percentile mirror distance before / after:", p90)
     assert p90[1] < 0.25 * p90[0]
     assert np.abs(result.points - points).max() < before["max"]
+
+
+def _box(sides=(1.0, 2.0, 3.0)):
+    """A box with these side lengths, midpoint-subdivided four times: three mirror planes, each exact."""
+    ms = pymeshlab.MeshSet()
+    ms.create_cube(size=1.0)
+    ms.meshing_surface_subdivision_midpoint(iterations=4, threshold=pymeshlab.PercentageValue(0))
+    return ms.current_mesh().vertex_matrix() * np.asarray(sides), ms.current_mesh().face_matrix()
+
+
+def test_a_box_names_its_other_mirror_planes_and_its_confidence_says_so():
+    """The three planes of a 1 x 2 x 3 box mirror all of it: one is paired, the other two are named as
+    alternatives with a warning, and the confidence is low (the twins agree with both other planes only at the
+    box's centre); the exactly symmetric box comes back unchanged."""
+    points, faces = _box()
+    posed = synthetic.random_rigid(points, seed=5)
+    with pytest.warns(SymblendWarning, match=r"another mirror symmetry fits this shape about as well as the one "
+                                             r"paired \(mirror plane, 100% of the surface mirrored\): mirror plane 2 "
+                                             r"\(100%\), mirror plane 3 \(100%\)"):
+        result = symmetrize(posed, faces=faces, pairs="auto")
+    found = result.report.auto_pairs
+    assert {"mirror plane 2", "mirror plane 3"} <= set(found.alternatives)
+    assert all(share == 1.0 for share in found.alternatives.values())
+    assert np.abs(result.points - posed).max() < 1e-6 * np.linalg.norm(np.ptp(points, axis=0))
+    assert found.mirror_map.coverage == 1.0 and found.mirror_map.confident_share < 0.1
+
+
+def test_a_rival_lowers_each_twins_confidence_by_how_far_it_puts_the_twin():
+    """Two planes of the box, x = 0 chosen and y = 0 a rival: where the rival's twin lies d local spacings from
+    the chosen twin, the agreement is exp(-d^2 / 2): 1 on the line where the planes meet."""
+    from filter_symblend.auto.rivals import Rival, rival_agreement
+    from filter_symblend.auto.surface import build_surface
+    points, faces = _box()
+    surface = build_surface(points, faces, config=AutoConfig())
+    chosen, rival = (plane_map(surface, normal, 0.0) for normal in np.eye(3)[:2])
+    twins = chosen.predict(points)
+    spacing = surface.local_spacing
+    agreement = rival_agreement([Rival(rival, 1.0)], points, twins, spacing)
+    expected = np.exp(-0.5 * (np.linalg.norm(points * [-1, 1, 1] - points * [1, -1, 1], axis=1) / spacing) ** 2)
+    np.testing.assert_allclose(agreement, expected, rtol=1e-12)
+    on_line = np.all(np.abs(points[:, :2]) < 1e-12, axis=1)
+    assert on_line.any() and np.all(agreement[on_line] == 1.0) and np.all(agreement[np.abs(points[:, 1]) > 0.3] < 0.01)
+
+
+def test_a_shape_with_one_mirror_plane_names_no_alternative(cow):
+    result = symmetrize(synthetic.random_rigid(cow.points, seed=2), faces=cow.faces, pairs="auto")
+    assert result.report.auto_pairs.alternatives == {}
+    assert result.report.auto_pairs.mirror_map.confident_share > 0.9
+    assert not any("another mirror symmetry" in message for message in result.report.warnings)

@@ -28,6 +28,7 @@ from ..core.report import MirrorMapReport
 from .config import AutoConfig
 from .growth import affine_mirror_maps
 from .maps import MirrorMap
+from .rivals import Rival, rival_agreement
 from .surface import Surface
 from .twins import find_twins
 
@@ -63,10 +64,12 @@ def evidence(mirror: MirrorMap, sources: np.ndarray, config: AutoConfig, toleran
     return twins, listed, errors
 
 
-def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, config: AutoConfig) -> MirrorPairs:
+def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, config: AutoConfig,
+                 rivals: list[Rival] = ()) -> MirrorPairs:
     """The twins of every pairable vertex of ``geometry`` (the input surface; ``mirror`` may live on a
     symmetrized output of it) that ``mirror`` mirrors, none on or toward a ``forbidden`` (N,) bool vertex;
-    duplicates of a vertex take its twin."""
+    duplicates of a vertex take its twin. Other symmetries that fit about as well (``rivals``, maps on
+    ``geometry``) lower the confidence where they put the twin elsewhere (:func:`.rivals.rival_agreement`)."""
     tolerance = config.landing_tolerance * geometry.diagonal
     sources = np.flatnonzero(geometry.usable & ~forbidden)
     twins, listed, errors = evidence(mirror, sources, config, tolerance)
@@ -86,6 +89,12 @@ def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, co
     corners[exact] = twins.vertex[rows][exact, None]
     weights[exact] = [1.0, 0.0, 0.0]
     twin = np.einsum("kj,kji->ki", weights, geometry.points[corners])
+    if rivals:
+        first = geometry.representative[vertex]  # a duplicate: its first copy's
+        spacing = np.maximum(geometry.local_spacing[first], 1e-12 * geometry.diagonal)
+        agreement = np.ones(len(confidence))
+        agreement[rows] = rival_agreement(rivals, geometry.points[first], twin, spacing)
+        confidence = confidence * agreement
     pairable = max(len(sources), 1)
     confident = confidence[listed] >= CONFIDENT
     summary = MirrorMapReport(mirror.name, float(np.count_nonzero(listed) / pairable),

@@ -38,6 +38,7 @@ from .field import MirrorField, field_centres, refitted, register, robust_fit, r
 from .intrinsic_map import intrinsic_pairs
 from .maps import MirrorMap, affine_map, field_map, pairs_map, plane_map, point_pairs_map
 from .registration import coherent_point_drift, registration_sample
+from .rivals import Rival, close_rivals
 from .surface import Outline, Surface
 from .twins import find_twins
 
@@ -121,8 +122,9 @@ def registered_field(surface: Surface, sample: np.ndarray, field: MirrorField, c
 
 def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress=None):
     """(the map that mirrors the most of the surface, {name: share mirrored} of every candidate tried, the
-    surface's best mirror plane (normal, offset)); SymmetryNotFoundError when none mirrors
-    ``min_coverage`` of it. ``scored`` (m,): the vertices the shares are measured on."""
+    surface's best mirror plane (normal, offset), the other symmetries that mirror about as much
+    (:mod:`.rivals`)); SymmetryNotFoundError when none mirrors ``min_coverage`` of it. ``scored`` (m,): the
+    vertices the shares are measured on."""
     planes = surface_mirror_planes(surface.points[surface.usable_index])
     rigid = [plane_map(surface, *plane, name="mirror plane" if rank == 1 else f"mirror plane {rank}")
              for rank, plane in enumerate(planes[:3], 1)]
@@ -133,9 +135,10 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress
     mirrored = tessellation_map(surface, ranked[:2], scored, config)
     if mirrored is not None:  # the tessellation mirrors itself: its own mirror, exact whatever the bend
         shares[mirrored.name] = coverage(mirrored, scored, config)
-        return mirrored, shares, planes[0]
+        return mirrored, shares, planes[0], close_rivals(mirrored, rigid, shares, scored, config)
     if shares[ranked[0].name] >= config.plane_suffices:
-        return _refuse_or(ranked[0], shares, config), shares, planes[0]
+        best = _refuse_or(ranked[0], shares, config)
+        return best, shares, planes[0], close_rivals(best, rigid, shares, scored, config)
     intrinsic = _intrinsic_map(surface, ranked[0].normal, config)
     if intrinsic is not None:
         shares[intrinsic.name] = coverage(intrinsic, scored, config)
@@ -168,14 +171,23 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress
         best = coarse_best
     if intrinsic is not None and shares[intrinsic.name] > shares[best.name]:
         best = intrinsic  # a swung limb: the pairs follow it, no smooth field does
+    tried = rigid + [mirror for mirror, _ in candidates] + ([] if intrinsic is None else [intrinsic])
     mirrored = tessellation_map(surface, [best], scored, config)
     if mirrored is not None:
         shares[mirrored.name] = coverage(mirrored, scored, config)
-        return mirrored, shares, planes[0]
+        return mirrored, shares, planes[0], _rivals(mirrored, tried + [best], shares, scored, config)
     rigid_share = max(shares[mirror.name] for mirror in rigid)
     # A plain map that mirrors min_coverage shows a symmetry up to the scan's noise; else the field must
     # prove it within its own precision.
-    return _refuse_or(best, shares, config, None if rigid_share >= config.min_coverage else scored), shares, planes[0]
+    best = _refuse_or(best, shares, config, None if rigid_share >= config.min_coverage else scored)
+    return best, shares, planes[0], _rivals(best, tried, shares, scored, config)
+
+
+def _rivals(best: MirrorMap, tried: list[MirrorMap], shares: dict, scored: np.ndarray, config: AutoConfig) -> list[Rival]:
+    """:func:`.rivals.close_rivals` among the maps ``tried``, each once (the finer registration of a coarse
+    candidate has its name, and its share)."""
+    by_name = {mirror.name: mirror for mirror in tried}
+    return close_rivals(best, list(by_name.values()), shares, scored, config)
 
 
 def _refuse_or(best: MirrorMap, shares: dict, config: AutoConfig, scored: np.ndarray | None = None) -> MirrorMap:

@@ -17,7 +17,7 @@ import dataclasses
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..core.geometry import normalize, reflection_across_plane, whitening
+from ..core.geometry import MirrorPlane, normalize, reflection_across_plane, whitening
 from ..core.mirror_planes import fit_surface_mirror_plane
 from .config import AutoConfig
 from .field import MirrorField
@@ -29,13 +29,15 @@ from .surface import Surface
 class MirrorMap:
     """``predict`` (m, 3) -> (m, 3): predicted twin positions in ``surface``'s space; ``normal`` (3,): the
     global mirror direction there, pointing to the left side; ``carry`` (normals (m, 3), positions (m, 3))
-    -> unit normals (m, 3) at the twins, about, of the normals at those positions."""
+    -> unit normals (m, 3) at the twins, about, of the normals at those positions; ``plane`` the plane of a
+    reflection (None for other maps)."""
 
     name: str
     surface: Surface
     predict: Callable[[np.ndarray], np.ndarray]
     normal: np.ndarray
     carry: Callable[[np.ndarray, np.ndarray], np.ndarray]
+    plane: MirrorPlane | None = None
 
     def mirror_normals(self, normals: np.ndarray, positions: np.ndarray) -> np.ndarray:
         """Unit normals (m, 3) at the twins of ``positions`` (m, 3), about, of the ``normals`` (m, 3) there."""
@@ -53,7 +55,7 @@ def plane_map(surface: Surface, normal: np.ndarray, offset: float, name: str = "
     normal = normalize(np.asarray(normal, dtype=float))
     reflection = np.eye(3) - 2.0 * np.outer(normal, normal)
     return MirrorMap(name, surface, lambda x: reflection_across_plane(x, normal, offset), normal,
-                     _linear_carry(reflection))
+                     _linear_carry(reflection), MirrorPlane(normal, float(offset)))
 
 
 def affine_map(surface: Surface) -> MirrorMap:

@@ -32,6 +32,7 @@ from ..errors import (DegenerateNeighbourhoodError, DisconnectedPairsError, Geom
                       SymblendWarning, SymmetryNotFoundError)
 from ..parameters import CORE, options_of
 from .confidence import doubtful_map_warning, mirror_pairs
+from .rivals import rival_warning
 from .config import DEFAULT, AutoConfig
 from .field import MirrorField, field_centres, register
 from .first_map import coverage, first_map
@@ -212,12 +213,15 @@ def _paired(points: np.ndarray, faces: np.ndarray, options: dict, start: Landmar
     scored = spread(points, surface.usable_index, config.score_samples)
     registration = spread(points, surface.usable_index, config.registration_samples)
     origin = {}  # how the rounds started: the first map's coverage and plane, or the intrinsic start
-    history, messages = [], []
+    history, messages, rivals = [], [], []
     refusal = None  # no map of space mirrors enough of the surface (in articulated mode: the intrinsic start)
     if landmarks is None and start == "maps":
         try:
-            mirror, shares, plane = first_map(surface, scored, config, scaled_progress(progress, 0.0, 30.0))
-            origin = {"coverage": shares, "surface_plane": plane}
+            mirror, shares, plane, rivals = first_map(surface, scored, config, scaled_progress(progress, 0.0, 30.0))
+            origin = {"coverage": shares, "surface_plane": plane,
+                      "alternatives": {rival.mirror.name: rival.share for rival in rivals}}
+            if rivals:
+                messages.append(rival_warning(mirror.name, shares[mirror.name], rivals))
             result, best = None, np.inf
         except SymmetryNotFoundError as refused:  # a strongly posed body, or a shape with no mirror symmetry
             if core["mode"] != "articulated":  # the intrinsic mirror holds under isometries: a pose, not a compression
@@ -294,7 +298,7 @@ def _paired(points: np.ndarray, faces: np.ndarray, options: dict, start: Landmar
         history.append(dataclasses.replace(entry, final=True))
     if progress is not None:
         progress(98.0, "every vertex's twin, with its confidence")
-    twins = mirror_pairs(source, surface, forbidden, config)
+    twins = mirror_pairs(source, surface, forbidden, config, rivals)
     doubtful = doubtful_map_warning(twins.report)
     if doubtful is not None:
         messages.append(doubtful)
