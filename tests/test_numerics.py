@@ -9,7 +9,7 @@ from scipy.sparse.csgraph import connected_components
 from filter_symblend.core.geometry import MIRROR_X, minimal_rotation, rotation_about_axis
 from filter_symblend.core.global_solve import MINUS_X, global_solve
 from filter_symblend.core.local_symmetries import local_symmetries
-from filter_symblend.core.neighbourhoods import pair_weights
+from filter_symblend.core.neighbourhoods import pair_weights, pair_weights_at
 from filter_symblend.core.warp import choice, iterative, splines
 from filter_symblend.errors import SymblendWarning
 from filter_symblend.testing import synthetic
@@ -409,3 +409,16 @@ def test_the_accelerated_mirror_plane_icp_reaches_the_converged_plane(cow, monke
     converged = mirror_planes._refine_plane(bent, cKDTree(bent), *start, None, 1e-6)[2]
     print("trimmed RMS: accelerated", accelerated, "plain 40 steps", capped, "plain 200 steps", converged)
     assert accelerated <= converged * 1.001 and accelerated <= capped * (1 + 1e-6)
+
+
+def test_the_weights_at_several_widths_from_one_search_equal_each_searched_alone():
+    """phi and theta from one neighbour search at the larger width: the same matrices, entry for entry, as the
+    weights found at each width alone (and one matrix for a width given twice)."""
+    rng = np.random.default_rng(4)
+    p = rng.normal(size=(3000, 3))
+    q = p * [-1, 1, 1] + 0.01 * rng.normal(size=(3000, 3))
+    wide, narrow, again = pair_weights_at(p, q, [0.3, 0.2, 0.3])
+    assert again is wide
+    for width, matrix in ((0.3, wide), (0.2, narrow)):
+        alone = pair_weights(p, q, width)
+        assert matrix.nnz == alone.nnz > 3000 and abs(matrix - alone).max() == 0.0

@@ -34,26 +34,56 @@ def _pair_distances(left: np.ndarray, right: np.ndarray, radius: float):
     return i[keep], j[keep], distance[keep]
 
 
+DISTANCE_BLOCK = 2**18  # index pairs per block of _max_side_distance: its temporaries stay in cache (1.4x faster)
+
+
 def _max_side_distance(left: np.ndarray, right: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
     """max(|p_i - p_j|, |q_i - q_j|) (k,) for index pairs i, j (k,), by einsum on squared
-    lengths: 4x faster than np.linalg.norm at 10^7 pairs."""
-    squared = []
-    for side in (left, right):
-        difference = side[i] - side[j]
-        squared.append(np.einsum("ij,ij->i", difference, difference))
-    return np.sqrt(np.maximum(*squared))
+    lengths (4x faster than np.linalg.norm at 10^7 pairs), in blocks of DISTANCE_BLOCK pairs."""
+    out = np.empty(len(i))
+    for start in range(0, len(i), DISTANCE_BLOCK):
+        rows, columns = i[start:start + DISTANCE_BLOCK], j[start:start + DISTANCE_BLOCK]
+        largest = None
+        for side in (left, right):
+            difference = side[rows] - side[columns]
+            squared = np.einsum("ij,ij->i", difference, difference)
+            largest = squared if largest is None else np.maximum(largest, squared, out=largest)
+        np.sqrt(largest, out=out[start:start + DISTANCE_BLOCK])
+    return out
 
 
 def pair_weights(left: np.ndarray, right: np.ndarray, width: float) -> sp.csr_matrix:
     """Symmetric sparse weights (n, n), diagonal 1, for pairs (left[i], right[i]) at width h."""
-    n = len(left)
-    i, j, distance = _pair_distances(left, right, TRUNCATION * width)
-    weight = np.exp(-((distance / width) ** 2))
-    rows = np.concatenate([i, j, np.arange(n)])
-    cols = np.concatenate([j, i, np.arange(n)])
-    data = np.concatenate([weight, weight, np.ones(n)])
-    return sp.csr_matrix((data, (rows, cols)), shape=(n, n))
+    return pair_weights_at(left, right, [width])[0]
 
+
+def pair_weights_at(left: np.ndarray, right: np.ndarray, widths: list[float]) -> list[sp.csr_matrix]:
+    """:func:`pair_weights` at each of ``widths``, from one neighbour search at the largest (phi and theta
+    share it: the narrower one's pairs are a subset; 10^4 pairs, widths 8 and 5: 1.25 -> 1.0 s)."""
+    n = len(left)
+    i, j, distance = _pair_distances(left, right, TRUNCATION * max(widths))
+    matrices = {}
+    for width in widths:
+        if width not in matrices:  # the same width twice: one matrix
+            keep = distance < TRUNCATION * width
+            matrices[width] = _symmetric(n, i[keep], j[keep], np.exp(-((distance[keep] / width) ** 2)))
+    return [matrices[width] for width in widths]
+
+
+def _symmetric(n: int, i: np.ndarray, j: np.ndarray, weight: np.ndarray) -> sp.csr_matrix:
+    """The symmetric (n, n) CSR matrix with ``weight`` at (i, j) and (j, i) for i < j and 1 on the diagonal.
+    Its rows are put in order by a counting sort (numpy's radix sort, below 2^16 pairs), their columns left as
+    they come: no entry is repeated, and scipy's conversion would sort every row (0.16 s a matrix at 10^4
+    pairs, phi width 8)."""
+    rows = np.concatenate([i, j, np.arange(n)])
+    columns = np.concatenate([j, i, np.arange(n)])
+    data = np.concatenate([weight, weight, np.ones(n)])
+    if n > np.iinfo(np.uint16).max + 1:
+        return sp.csr_matrix((data, (rows, columns)), shape=(n, n))
+    order = np.argsort(rows.astype(np.uint16), kind="stable")
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(rows, minlength=n), out=indptr[1:])
+    return sp.csr_matrix((data[order], columns[order], indptr), shape=(n, n))
 
 def scaled_weights(weights: sp.csr_matrix, row: np.ndarray, column: np.ndarray) -> sp.csr_matrix:
     """diag(row) @ weights @ diag(column), by scaling the stored values (building

@@ -17,7 +17,7 @@ from .landmark_asymmetry import fit_mirror_plane
 from .landmark_pairs import LandmarkPairs, midline_labels
 from .local_symmetries import LocalSymmetries, local_symmetries
 from .mirror_pairs import MirrorPairs
-from .neighbourhoods import mean_nearest_spacing, pair_weights, require_connected, scaled_weights
+from .neighbourhoods import mean_nearest_spacing, pair_weights_at, require_connected, scaled_weights
 from .report import LocalFit, Report, Spread, Timings, Widths
 from .warp import thin_plate_spline
 
@@ -141,9 +141,8 @@ def landmark_targets(points: np.ndarray, landmarks: LandmarkPairs, options: dict
     measured_spacing = mean_nearest_spacing(points[unique])
     spacing = options["width_spacing"] or measured_spacing
     phi_h, theta_h = options["phi_width"] * spacing, options["theta_width"] * spacing
-    phi = pair_weights(p0, q0, phi_h)
+    phi, theta = pair_weights_at(p0, q0, [phi_h, theta_h])  # one neighbour search for both
     require_connected(phi, p0, q0, labels, spacing, "phi_width", options["phi_width"])
-    theta = phi if theta_h == phi_h else pair_weights(p0, q0, theta_h)
     if (wl * wr != 1).any():  # a broken side must not shape the local symmetries around it,
         theta = scaled_weights(theta, np.ones(n + m), wl * wr)  # a landmark of priority shapes them more
     clock["neighbourhoods"] = time.perf_counter()
