@@ -183,7 +183,8 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress
     return best, shares, planes[0], _rivals(best, tried, shares, scored, config)
 
 
-def _rivals(best: MirrorMap, tried: list[MirrorMap], shares: dict, scored: np.ndarray, config: AutoConfig) -> list[Rival]:
+def _rivals(best: MirrorMap, tried: list[MirrorMap], shares: dict, scored: np.ndarray,
+            config: AutoConfig) -> list[Rival]:
     """:func:`.rivals.close_rivals` among the maps ``tried``, each once (the finer registration of a coarse
     candidate has its name, and its share)."""
     by_name = {mirror.name: mirror for mirror in tried}

@@ -20,8 +20,8 @@ import dataclasses
 
 import numpy as np
 
-from .config import AutoConfig
 from ..core.mirror_planes import best_plane_from
+from .config import AutoConfig
 from .maps import MirrorMap, plane_map
 from .twins import find_twins
 
@@ -47,8 +47,11 @@ def close_rivals(best: MirrorMap, candidates: list[MirrorMap], shares: dict[str,
     """The ``candidates`` that are rivals of ``best`` (see the module doc), by share; ``shares``: name -> share
     of the ``scored`` (m,) vertices each mirrors."""
     surface = best.surface
-    bound = SIGNIFICANCE / np.sqrt(len(scored))  # the largest the test can allow: b + c <= m
-    near = [mirror for mirror in candidates if mirror.name != best.name and shares[mirror.name] >= shares[best.name] - bound]
+    # Only candidates whose share within the whole tolerance is this close are tested (the test allows at most
+    # this difference, b + c <= m): the rest cost nothing.
+    bound = SIGNIFICANCE / np.sqrt(len(scored))
+    near = [mirror for mirror in candidates
+            if mirror.name != best.name and shares[mirror.name] >= shares[best.name] - bound]
     if not near:
         return []
     tolerance = config.landing_tolerance * surface.diagonal
@@ -65,7 +68,7 @@ def close_rivals(best: MirrorMap, candidates: list[MirrorMap], shares: dict[str,
         if gain > SIGNIFICANCE * np.sqrt(np.count_nonzero(other != mirrored)):
             continue
         twins = mirror.predict(positions)
-        if any(np.median(np.linalg.norm(twins - other, axis=1)) <= tolerance for other in named):
+        if any(np.median(np.linalg.norm(twins - earlier, axis=1)) <= tolerance for earlier in named):
             continue  # a symmetry already named
         named.append(twins)
         rivals.append(Rival(mirror, shares[mirror.name]))

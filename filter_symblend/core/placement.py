@@ -46,7 +46,10 @@ def placement_spread(points: np.ndarray, faces: np.ndarray, landmarks: LandmarkP
     (mesh units); core ``options``, full Steps 1 and 2 ``full``; see the module doc."""
     vertices = full.vertices
     centres = points[vertices]
-    normals = vertex_normals(points, faces)[0][vertices] if full.flat is None else np.tile(full.flat, (len(vertices), 1))
+    if full.flat is None:
+        normals = vertex_normals(points, faces)[0][vertices]
+    else:  # a flat input: every step in its plane
+        normals = np.tile(full.flat, (len(vertices), 1))
     warp = thin_plate_spline(centres, full.target - centres, full.flat)
     fixed = {**options, "width_spacing": full.spacing}
     rng = np.random.default_rng(PLACEMENT_SEED)
