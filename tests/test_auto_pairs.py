@@ -536,6 +536,28 @@ def test_a_box_names_its_other_mirror_planes_and_its_confidence_says_so():
     assert found.mirror_map.coverage == 1.0 and found.mirror_map.confident_share < 0.1
 
 
+def test_the_pairs_command_writes_the_chosen_symmetrys_pairs_of_a_box_to_correct(tmp_path, capsys):
+    """Nothing is confident on a box (three planes): `symblend pairs` still writes the chosen plane's pairs, each
+    pair mirror images across it, and says that other symmetries fit as well."""
+    from filter_symblend.commands.main import main
+    from filter_symblend.landmarks.formats import read_landmarks
+    points, faces = _box()
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(points, faces))
+    ms.save_current_mesh(str(tmp_path / "box.ply"))
+    assert main(["pairs", str(tmp_path / "box.ply"), "-o", str(tmp_path / "box.pp")]) == 0
+    printed = capsys.readouterr()
+    assert "box.pp: 20 automatic pairs (of 0 confident twins; map: mirror plane;" in printed.out
+    assert "other symmetries mirror this shape about as well (mirror plane 2, mirror plane 3" in printed.err
+    assert "these pairs follow mirror plane, whatever their confidence; keep them, or move them" in printed.err
+    named = {landmark.name: np.array(landmark.position) for landmark in read_landmarks(tmp_path / "box.pp").landmarks}
+    left = np.array([named[f"L_auto_{k}"] for k in range(1, 21)])
+    right = np.array([named[f"R_auto_{k}"] for k in range(1, 21)])
+    flipped = np.abs(left - right) > 1e-9  # one coordinate changes sign, the same one for every pair
+    assert np.all(flipped.sum(axis=1) == 1) and len(set(np.argmax(flipped, axis=1))) == 1
+    np.testing.assert_allclose(np.abs(left), np.abs(right), atol=1e-9)
+
+
 def test_a_rival_lowers_each_twins_confidence_by_how_far_it_puts_the_twin():
     """Two planes of the box, x = 0 chosen and y = 0 a rival: where the rival's twin lies d local spacings from
     the chosen twin, the agreement is exp(-d^2 / 2): 1 on the line where the planes meet."""

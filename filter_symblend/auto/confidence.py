@@ -101,7 +101,8 @@ def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, co
                               float(np.count_nonzero(listed) / max(landed, 1)),
                               float(np.count_nonzero(confident) / pairable), CONFIDENT,
                               dict(zip(("round_trip", "landing", "neighbours"),
-                                       np.median(errors[listed], axis=0).tolist() if listed.any() else [None] * 3)))
+                                       np.median(errors[listed], axis=0).tolist() if listed.any() else [None] * 3)),
+                              {rival.mirror.name: rival.share for rival in rivals})
     return MirrorPairs(vertex, twin, corners, weights, confidence[rows], len(geometry.points), summary)
 
 

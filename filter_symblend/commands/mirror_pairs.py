@@ -79,7 +79,12 @@ def run(args) -> int:
     print(f"{args.output}: {len(rows)} automatic pairs (of {int(pairs.confident().sum())} confident twins; map: "
           f"{report.map}; {report.confident_share:.0%} of the surface has a confident twin, "
           f"{report.coverage:.0%} a twin){' and your ' + str(len(kept)) + ' landmarks' if kept else ''}")
-    if len(rows) < args.count:
+    if report.alternatives:
+        others = ", ".join(report.alternatives)
+        print(f"symblend: warning: other symmetries mirror this shape about as well ({others}): these pairs follow "
+              f"{report.map}, whatever their confidence; keep them, or move them to the symmetry you mean, and "
+              f"symmetrize with -l {args.output}.", file=sys.stderr)
+    elif len(rows) < args.count:
         print(f"symblend: warning: only {len(rows)} confident pairs lie apart from the midline; place landmarks "
               "where the map is not sure (symblend symmetrize --pairs auto writes the per-vertex confidence "
               "as symblend_pair_confidence).", file=sys.stderr)

@@ -75,7 +75,9 @@ def spread_left_sides(sources: np.ndarray, twins: np.ndarray, eligible: np.ndarr
 def pairs_to_check(pairs: MirrorPairs, points: np.ndarray, count: int,
                    threshold: float = CONFIDENT) -> np.ndarray:
     """Rows into ``pairs`` (c,): up to ``count`` of the confident pairs, spread over the surface of ``points``
-    (N, 3) by :func:`spread_left_sides`."""
+    (N, 3) by :func:`spread_left_sides`. When other symmetries fit about as well (``report.alternatives``),
+    whose disagreement is what lowered the confidence, from every twin: the chosen symmetry's pairs, for the
+    user to keep or move to the one meant."""
     points = np.asarray(points, dtype=float)
-    return spread_left_sides(points[pairs.vertex], pairs.twin, pairs.confident(threshold), count,
-                             bounding_diagonal(points))
+    usable = pairs.confident(0.0 if pairs.report.alternatives else threshold)
+    return spread_left_sides(points[pairs.vertex], pairs.twin, usable, count, bounding_diagonal(points))

@@ -144,7 +144,9 @@ class MirrorMapReport:
     """How sure a mirror map is (core/mirror_pairs): its ``map`` name; the share of the pairable vertices
     with a twin (``coverage``), with a twin whose landing was consistent (``consistency``: twins /
     landings) and with a confident twin (``confident_share``, confidence >= ``confidence_threshold``); the
-    median of each error in local spacings (``round_trip``, ``landing``, ``neighbours``; None without twins)."""
+    median of each error in local spacings (``round_trip``, ``landing``, ``neighbours``; None without twins);
+    other symmetries that mirror about as much of the surface and lowered the confidence where they disagree
+    (``alternatives``: name -> share, auto/rivals)."""
 
     map: str
     coverage: float
@@ -152,6 +154,7 @@ class MirrorMapReport:
     confident_share: float
     confidence_threshold: float
     median_errors_in_spacings: dict[str, float | None]
+    alternatives: dict[str, float] = dataclasses.field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
