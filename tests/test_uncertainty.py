@@ -233,10 +233,10 @@ def test_errors_name_the_problem_and_the_fix(cow, monkeypatch):
         symmetrize(cow.points, left, right, uncertainty="bootstrap")
     full_solve = uncertainty.landmark_targets
 
-    def all_but_the_full_solve_fail(points, landmarks, options, *rest):
+    def all_but_the_full_solve_fail(points, landmarks, options, *rest, **keywords):
         if len(landmarks.left) < 10:
             raise GeometryError("the pairs fall apart")
-        return full_solve(points, landmarks, options, *rest)
+        return full_solve(points, landmarks, options, *rest, **keywords)
 
     monkeypatch.setattr(uncertainty, "landmark_targets", all_but_the_full_solve_fail)
     checked = check_landmarks(cow.points, left, right)

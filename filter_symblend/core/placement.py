@@ -58,7 +58,7 @@ def placement_spread(points: np.ndarray, faces: np.ndarray, landmarks: LandmarkP
     for draw in range(draws):
         moved = centres + tangent_steps(normals, precision, rng)
         shifted[vertices] = moved
-        targets = landmark_targets(shifted, landmarks, fixed).target
+        targets = landmark_targets(shifted, landmarks, fixed, flat=full.flat).target  # steps keep a flat input flat
         rotation, translation = rigid_fit(targets, full.target)
         residuals[:, draw] = targets @ rotation.T + translation - moved - warp(moved)
     squares = np.zeros(len(points))

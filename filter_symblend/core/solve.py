@@ -92,6 +92,9 @@ def _report_progress(progress, percent: float, message: str) -> None:
         progress(percent, message)
 
 
+_MEASURED = object()  # landmark_targets' default ``flat``: measure it
+
+
 @dataclasses.dataclass(frozen=True)
 class LandmarkTargets:
     """Steps 1 and 2 on checked landmarks: where each landmark vertex goes. ``vertices`` (k,): the landmark
@@ -119,10 +122,11 @@ class LandmarkTargets:
 
 
 def landmark_targets(points: np.ndarray, landmarks: LandmarkPairs, options: dict, progress=None,
-                     warn: bool = False, clock: dict | None = None) -> LandmarkTargets:
+                     warn: bool = False, clock: dict | None = None, flat=_MEASURED) -> LandmarkTargets:
     """Step 1 and Step 2 (the paper's local symmetries and their blend) for checked ``landmarks`` on
     ``points`` (N, 3), with validated core ``options``; ``warn``: warn about pairs that look swapped or
-    are poor mirror images; ``clock``: stage end times are added to it."""
+    are poor mirror images; ``clock``: stage end times are added to it; ``flat``: the input's
+    :func:`~.geometry.flat_normal` when already known (a repeated solve on the same input), else measured."""
     clock = {} if clock is None else clock
     left, right, ids, midline = landmarks.left, landmarks.right, landmarks.ids, landmarks.midline
     wl, wr = landmarks.left_weights, landmarks.right_weights
@@ -148,7 +152,7 @@ def landmark_targets(points: np.ndarray, landmarks: LandmarkPairs, options: dict
     clock["neighbourhoods"] = time.perf_counter()
     _report_progress(progress, 10.0, f"local symmetries ({options['mode']})")
 
-    flat = flat_normal(points)  # a flat (2D) input: every stage keeps to its plane
+    flat = flat_normal(points) if flat is _MEASURED else flat  # a flat (2D) input: every stage keeps to its plane
     local = local_symmetries(options["mode"], theta, p0, q0, labels, flat)
     if warn:
         _warn_about_local_fits(local, p0, q0, labels, options["mode"])

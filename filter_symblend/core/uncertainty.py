@@ -156,7 +156,7 @@ def jackknife(points: np.ndarray, landmarks: LandmarkPairs, options: dict, full:
     for group in left_out_groups(len(labels)):
         try:
             reduced = landmark_targets(points, _without(landmarks, group[group < pairs], group[group >= pairs] - pairs),
-                                       fixed)
+                                       fixed, flat=full.flat)
         except SymblendError as error:  # e.g. the pairs fall apart without it
             kept_in.update({labels[unit]: str(error) for unit in group})
             continue
