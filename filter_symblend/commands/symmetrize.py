@@ -9,6 +9,7 @@ import sys
 
 import pymeshlab
 
+from ..core.placement import PLACEMENT_DRAWS
 from ..core.report import UncertaintySummary
 from ..errors import SymblendError
 from ..meshlab.meshset_filter import FilterRun, run_filter
@@ -116,8 +117,8 @@ def uncertainty_line(uncertainty: UncertaintySummary, landmarks: dict | None) ->
     top, misplaced = uncertainty.most_influential_pair, uncertainty.probably_misplaced
     turns = ("in turn" if uncertainty.groups in (None, uncertainty.left_out)
              else f"in {uncertainty.groups} random groups")
-    spread = (f"jackknife, {uncertainty.left_out} landmarks left out {turns}" if uncertainty.method == "jackknife"
-              else f"placement error of {uncertainty.landmark_precision:.4g} RMS, 100 random placements")
+    spread = (f"jackknife, {uncertainty.left_out} landmarks left out {turns}" if uncertainty.method == "jackknife" else
+              f"placement error of {uncertainty.landmark_precision:.4g} RMS, {PLACEMENT_DRAWS} random placements")
     line = (f"uncertainty ({spread}): median "
             f"{uncertainty.median_relative:.3%}, p90 {uncertainty.p90_relative:.3%}, max "
             f"{uncertainty.max_relative:.3%} of the diagonal; most influential: {landmark_name(top, landmarks)} "

@@ -12,8 +12,8 @@ import numpy as np
 from ..auto import solve_with_automatic_pairs
 from ..core.mirror_fill import fill_from_mirror
 from ..core.geometry import MirrorPlane
-from ..core.solve import SymmetrizationResult, landmark_targets, scaled_progress, solve
 from ..core.placement import placement_spread
+from ..core.solve import SymmetrizationResult, landmark_targets, scaled_progress, solve
 from ..core.uncertainty import jackknife
 from ..errors import SymblendWarning
 from ..parameters import CORE, options_of
