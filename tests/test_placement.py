@@ -118,3 +118,24 @@ def test_errors_name_the_problem_and_the_fix(cow):
         symmetrize(cow.points, left, right, uncertainty="jackknife", landmark_precision=0.5)
     with pytest.raises(ParameterError, match=r"`landmark_precision` must be in \[0, inf\), got -0.1"):
         symmetrize(cow.points, left, right, uncertainty="placement", landmark_precision=-0.1)
+
+
+def test_a_batch_row_asks_for_the_placement_band_by_its_columns(tmp_path, cow):
+    from filter_symblend.commands.batch import read_manifest, run_row
+    points = synthetic.bend(cow.points, 0.3)
+    left, right = cow.landmarks(12)
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(points, cow.faces))
+    ms.save_current_mesh(str(tmp_path / "bent.ply"))
+    write_landmarks(tmp_path / "bent.pp", LandmarkSet([Landmark(f"{side}_point{k}", tuple(points[v])) for k in range(12)
+                                                       for side, v in (("L", left[k]), ("R", right[k]))]))
+    precision = 0.005 * cow.diagonal
+    (tmp_path / "study.csv").write_text(f"mesh,landmarks,uncertainty,landmark_precision\nbent.ply,bent.pp,placement,"
+                                        f"{precision!r}\n")
+    [row] = read_manifest(tmp_path / "study.csv", tmp_path / "out")
+    (tmp_path / "out").mkdir()
+    summary = run_row(row)
+    report = json.loads(row.report.read_text())["uncertainty"]
+    assert report["method"] == "placement" and report["landmark_precision"] == pytest.approx(precision)
+    assert summary["status"] == "ok" and float(summary["uncertainty_p90"]) == pytest.approx(report["p90_relative"],
+                                                                                            rel=1e-5)
