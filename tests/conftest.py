@@ -105,6 +105,18 @@ def meshset_with_pairs(points, faces, left, right, attribute="symblend_pair") ->
     return ms
 
 
+def saved_with_landmarks(folder: pathlib.Path, points, faces, left, right) -> tuple[pathlib.Path, pathlib.Path]:
+    """``folder``/bent.ply (the mesh) and ``folder``/bent.pp (the pairs as landmarks L_point{k} / R_point{k})."""
+    from filter_symblend.landmarks.formats import Landmark, LandmarkSet, write_landmarks
+    mesh, landmarks = folder / "bent.ply", folder / "bent.pp"
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(points, faces))
+    ms.save_current_mesh(str(mesh))
+    write_landmarks(landmarks, LandmarkSet([Landmark(f"{side}_point{k}", tuple(points[vertex])) for k in range(len(left))
+                                            for side, vertex in (("L", left[k]), ("R", right[k]))]))
+    return mesh, landmarks
+
+
 def meshlab_mirror_distance(points, faces, measured: dict) -> list[float]:
     """[max, mean, RMS] of MeshLab's Hausdorff from the mesh to its reflection across the plane that
     ``measured`` (a mirror asymmetry of the report) names: an independent computation of it."""

@@ -5,7 +5,6 @@ filter, the command and its errors."""
 import json
 
 import numpy as np
-import pymeshlab
 import pytest
 from scipy.spatial import cKDTree
 
@@ -16,10 +15,9 @@ from filter_symblend.core.landmark_pairs import check_landmarks
 from filter_symblend.core.mesh_quantities import vertex_normals
 from filter_symblend.core.placement import PLACEMENT_SEED, placement_spread, tangent_steps
 from filter_symblend.core.solve import landmark_targets
-from filter_symblend.landmarks.formats import Landmark, LandmarkSet, write_landmarks
 from filter_symblend.parameters import CORE, DEFAULTS, options_of
 from filter_symblend.testing import synthetic
-from conftest import meshset_with_pairs
+from conftest import meshset_with_pairs, saved_with_landmarks
 
 BAND = float(np.sqrt(6.2514 / 3))  # 90 % of an isotropic 3D Gaussian error of RMS length s lies within BAND x s
 
@@ -94,12 +92,8 @@ def test_the_meshset_filter_and_the_command_give_the_same_band_and_say_what_it_i
     np.testing.assert_allclose(values, expected.uncertainty, rtol=1e-9, atol=1e-12 * cow.diagonal)
     assert report["uncertainty"]["method"] == "placement"
 
-    mesh, landmarks, output, saved = (tmp_path / name for name in ("bent.ply", "bent.pp", "out.ply", "out.json"))
-    ms = pymeshlab.MeshSet()
-    ms.add_mesh(pymeshlab.Mesh(points, cow.faces))
-    ms.save_current_mesh(str(mesh))
-    write_landmarks(landmarks, LandmarkSet([Landmark(f"{side}_point{k}", tuple(points[v])) for k in range(12)
-                                            for side, v in (("L", left[k]), ("R", right[k]))]))
+    mesh, landmarks = saved_with_landmarks(tmp_path, points, cow.faces, left, right)
+    output, saved = tmp_path / "out.ply", tmp_path / "out.json"
     assert main(["symmetrize", str(mesh), "-l", str(landmarks), "-o", str(output), "--report", str(saved),
                  "--uncertainty", "placement", "--landmark-precision", f"{precision!r}"]) == 0
     written = json.loads(saved.read_text())["uncertainty"]
@@ -124,11 +118,7 @@ def test_a_batch_row_asks_for_the_placement_band_by_its_columns(tmp_path, cow):
     from filter_symblend.commands.batch import read_manifest, run_row
     points = synthetic.bend(cow.points, 0.3)
     left, right = cow.landmarks(12)
-    ms = pymeshlab.MeshSet()
-    ms.add_mesh(pymeshlab.Mesh(points, cow.faces))
-    ms.save_current_mesh(str(tmp_path / "bent.ply"))
-    write_landmarks(tmp_path / "bent.pp", LandmarkSet([Landmark(f"{side}_point{k}", tuple(points[v])) for k in range(12)
-                                                       for side, v in (("L", left[k]), ("R", right[k]))]))
+    saved_with_landmarks(tmp_path, points, cow.faces, left, right)
     precision = 0.005 * cow.diagonal
     (tmp_path / "study.csv").write_text(f"mesh,landmarks,uncertainty,landmark_precision\nbent.ply,bent.pp,placement,"
                                         f"{precision!r}\n")

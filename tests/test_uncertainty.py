@@ -6,7 +6,6 @@ import dataclasses
 import json
 
 import numpy as np
-import pymeshlab
 import pytest
 
 from filter_symblend import UNCERTAINTY_ATTRIBUTE, GeometryError, ParameterError, SymblendWarning, symmetrize
@@ -14,12 +13,11 @@ from filter_symblend.commands.main import main
 from filter_symblend.core import uncertainty
 from filter_symblend.core.geometry import rigid_fit
 from filter_symblend.core.landmark_pairs import check_landmarks
-from filter_symblend.landmarks.formats import Landmark, LandmarkSet, write_landmarks
 from filter_symblend.meshlab.attributes import optional_attribute
 from filter_symblend.meshlab.ply_attributes import read_ply_vertex_properties
 from filter_symblend.parameters import CORE, DEFAULTS, options_of
 from filter_symblend.testing import synthetic
-from conftest import meshset_with_pairs
+from conftest import meshset_with_pairs, saved_with_landmarks
 
 
 def _slow_jackknife(points, left, right, mode):
@@ -261,12 +259,8 @@ def test_the_meshset_filter_writes_the_uncertainty_on_its_output_layer(cow):
 def test_the_command_prints_it_by_landmark_name_and_saves_it_in_the_ply(tmp_path, cow, capsys):
     points = synthetic.bend(cow.points, 0.4)
     left, right = cow.landmarks(12)
-    mesh, landmarks, output, report = (tmp_path / name for name in ("bent.ply", "bent.pp", "out.ply", "out.json"))
-    ms = pymeshlab.MeshSet()
-    ms.add_mesh(pymeshlab.Mesh(points, cow.faces))
-    ms.save_current_mesh(str(mesh))
-    write_landmarks(landmarks, LandmarkSet([Landmark(f"{side}_point{k}", tuple(points[v])) for k in range(12)
-                                            for side, v in (("L", left[k]), ("R", right[k]))]))
+    mesh, landmarks = saved_with_landmarks(tmp_path, points, cow.faces, left, right)
+    output, report = tmp_path / "out.ply", tmp_path / "out.json"
     assert main(["symmetrize", str(mesh), "-l", str(landmarks), "-o", str(output), "--report", str(report),
                  "--uncertainty", "jackknife"]) == 0
     written = json.loads(report.read_text())["uncertainty"]
@@ -292,11 +286,7 @@ def test_a_batch_row_with_the_jackknife_summarizes_it(tmp_path, cow):
     left, right = cow.landmarks(40)
     distance = np.linalg.norm(cow.points - cow.points[right[9]], axis=1)
     right = np.where(np.arange(40) == 9, np.argmin(np.abs(distance - 0.10 * cow.diagonal)), right)
-    ms = pymeshlab.MeshSet()
-    ms.add_mesh(pymeshlab.Mesh(points, cow.faces))
-    ms.save_current_mesh(str(tmp_path / "bent.ply"))
-    write_landmarks(tmp_path / "bent.pp", LandmarkSet([Landmark(f"{side}_point{k}", tuple(points[v])) for k in range(40)
-                                                       for side, v in (("L", left[k]), ("R", right[k]))]))
+    saved_with_landmarks(tmp_path, points, cow.faces, left, right)
     (tmp_path / "study.csv").write_text("mesh,landmarks,uncertainty\nbent.ply,bent.pp,jackknife\n")
     [row] = read_manifest(tmp_path / "study.csv", tmp_path / "out")
     (tmp_path / "out").mkdir()
