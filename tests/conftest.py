@@ -112,7 +112,8 @@ def saved_with_landmarks(folder: pathlib.Path, points, faces, left, right) -> tu
     ms = pymeshlab.MeshSet()
     ms.add_mesh(pymeshlab.Mesh(points, faces))
     ms.save_current_mesh(str(mesh))
-    write_landmarks(landmarks, LandmarkSet([Landmark(f"{side}_point{k}", tuple(points[vertex])) for k in range(len(left))
+    write_landmarks(landmarks, LandmarkSet([Landmark(f"{side}_point{k}", tuple(points[vertex]))
+                                            for k in range(len(left))
                                             for side, vertex in (("L", left[k]), ("R", right[k]))]))
     return mesh, landmarks
 

@@ -93,8 +93,7 @@ class AutomaticPairsReport:
     landmarks or the intrinsic mirror started the rounds), what the intrinsic start tried
     (``intrinsic_start``, a diagnostic record; None unless it ran), the output's distance to its own
     reflection over the scored vertices (``output_asymmetry``: RMS, ``output_asymmetry_p99``: 99th
-    percentile; / diagonal), the other symmetries that mirror about as much of the surface as the first map
-    (``alternatives``: name -> share, :mod:`.rivals`) and the ``warnings`` raised."""
+    percentile; / diagonal) and the ``warnings`` raised."""
 
     pair_count: int
     midline_count: int
@@ -110,7 +109,12 @@ class AutomaticPairsReport:
     output_asymmetry: float | None = None
     output_asymmetry_p99: float | None = None
     warnings: tuple[str, ...] = ()
-    alternatives: dict[str, float] = dataclasses.field(default_factory=dict)
+
+    @property
+    def alternatives(self) -> dict[str, float]:
+        """The other symmetries that mirror about as much of the surface as the first map (name -> share,
+        :mod:`.rivals`): its mirror map's, whose confidence they lowered."""
+        return self.mirror_map.alternatives
 
     def to_dict(self) -> dict[str, Any]:
         out = {"excluded_vertices": self.excluded_vertices}
@@ -118,7 +122,6 @@ class AutomaticPairsReport:
             out["coverage"] = dict(self.coverage)
             out["surface_plane"] = {"normal": [float(value) for value in self.surface_plane.normal],
                                    "offset": float(self.surface_plane.offset)}
-            out["alternatives"] = dict(self.alternatives)
         if self.intrinsic_start is not None:
             out["intrinsic_start"] = self.intrinsic_start
         out["rounds"] = [entry.to_dict() for entry in self.rounds]

@@ -32,7 +32,6 @@ from ..errors import (DegenerateNeighbourhoodError, DisconnectedPairsError, Geom
                       SymblendWarning, SymmetryNotFoundError)
 from ..parameters import CORE, options_of
 from .confidence import doubtful_map_warning, mirror_pairs
-from .rivals import rival_warning
 from .config import DEFAULT, AutoConfig
 from .field import MirrorField, field_centres, register
 from .first_map import coverage, first_map
@@ -40,6 +39,7 @@ from .intrinsic_start import cannot_start, intrinsic_start
 from .maps import MirrorMap, field_map, plane_map
 from .pairs import Constraints, as_landmarks, find_pairs, spread
 from .report import AutomaticPairsReport, Round
+from .rivals import rival_warning
 from .surface import Outline, Surface, build_surface
 
 
@@ -218,8 +218,7 @@ def _paired(points: np.ndarray, faces: np.ndarray, options: dict, start: Landmar
     if landmarks is None and start == "maps":
         try:
             mirror, shares, plane, rivals = first_map(surface, scored, config, scaled_progress(progress, 0.0, 30.0))
-            origin = {"coverage": shares, "surface_plane": plane,
-                      "alternatives": {rival.mirror.name: rival.share for rival in rivals}}
+            origin = {"coverage": shares, "surface_plane": plane}
             if rivals:
                 messages.append(rival_warning(mirror.name, shares[mirror.name], rivals))
             result, best = None, np.inf
