@@ -2,10 +2,10 @@
 with the paper's Figure 1 map, docs/benchmarks.md#dense-pairs):
 
 - k <= EXACT_CENTRES: the dense LU of the spline's system (core/warp/splines.py), O(k^3): 0.2 s at 2,000;
-- k <= ITERATIVE_CENTRES: the same spline by iterative refinement (core/warp/iterative.py), O(k^2) per step,
+- k <= ITERATIVE_CENTRES: the same spline by a preconditioned iteration (core/warp/iterative.py), O(k^2) per step,
   within 1e-6 of the diagonal of the dense one: faster than the LU above EXACT_CENTRES;
 - beyond: the approximation (core/warp/splines.py), exact at the landmarks, about 2e-4 of the diagonal from
-  the exact spline: its cost grows as k, the refinement's as k^2 per step.
+  the exact spline: its cost grows as k, the iteration's as k^2 per step.
 A flat input takes the spline of its plane whatever k.
 """
 
@@ -17,7 +17,7 @@ from .iterative import iterative_thin_plate_spline
 from .splines import ApproximateThinPlateSpline, PlanarThinPlateSpline, ThinPlateSpline
 
 EXACT_CENTRES = 5_000
-ITERATIVE_CENTRES = 40_000  # 20,000 pairs: a refinement step takes about 5 s beyond
+ITERATIVE_CENTRES = 40_000  # 20,000 pairs: an iteration step takes about 5 s beyond
 
 
 def thin_plate_spline(centres: np.ndarray, values: np.ndarray, flat: np.ndarray | None = None):

@@ -20,7 +20,7 @@ a landmark, so those vertices are evaluated again from coordinate differences
 (scipy's cdist).
 
 Beyond the landmarks an iterative solve reaches (warp/choice.py), the exact spline is out of
-reach (its evaluation grows as k per vertex, each refinement step as k^2), so
+reach (its evaluation grows as k per vertex, each iteration step as k^2), so
 ``ApproximateThinPlateSpline`` takes over: the exact spline through SUBSET_CENTRES
 landmarks spread by farthest-point sampling, plus what it leaves at all the
 landmarks, interpolated by local splines of the same kernel on overlapping
