@@ -81,6 +81,41 @@ def test_confidence_finds_the_part_a_map_gets_wrong(remeshed_cow):
         assert np.mean(confidence[away] >= CONFIDENT) > 0.9
 
 
+def test_a_second_map_gives_the_twins_where_its_evidence_is_stronger(remeshed_cow):
+    """The torn map above (3 edges off on one end of the body) with the true reflection as the second map (the
+    intrinsic mirror's role): where the torn map is doubtful each vertex takes the twin of the map with the
+    higher confidence, each map's twins and confidences computed alone, and elsewhere the torn map's; in the
+    tear that is the true reflection's, so the tear is confident again, and the report names the second map
+    with its share."""
+    truth = remeshed_cow
+    surface = build_surface(truth.points, truth.faces)
+    offset = 0.5 * (truth.points[:, 0].max() + truth.points[:, 0].min())
+    exact = plane_map(surface, [1.0, 0.0, 0.0], offset, name="true reflection")
+    end = truth.points[:, 2].max() - 0.2 * np.ptp(truth.points[:, 2])
+
+    def torn(x):
+        predicted = exact.predict(x)
+        predicted[x[:, 2] > end] += [0.0, 0.0, -3.0 * surface.spacing]
+        return predicted
+
+    tearing = MirrorMap("torn", surface, torn, exact.normal, exact.carry)
+    none = np.zeros(len(truth.points), dtype=bool)
+    merged = mirror_pairs(tearing, surface, none, DEFAULT, second=exact)
+    (torn_twin, torn_confidence), (true_twin, true_confidence) = (
+        mirror_pairs(mirror, surface, none, DEFAULT).per_vertex() for mirror in (tearing, exact))
+    twin, confidence = merged.per_vertex()
+    second = (torn_confidence < CONFIDENT) & (true_confidence > torn_confidence)
+    np.testing.assert_allclose(confidence, np.where(second, true_confidence, torn_confidence))
+    np.testing.assert_allclose(twin[second], true_twin[second])
+    np.testing.assert_allclose(twin[~second & (torn_confidence > 0)], torn_twin[~second & (torn_confidence > 0)])
+    in_tear = truth.points[:, 2] > end + 3 * surface.spacing
+    assert np.mean(second[in_tear]) > 0.9 and np.mean(confidence[in_tear] >= CONFIDENT) > 0.9
+    assert re.fullmatch(r"torn; the true reflection for \d+% of the vertices", merged.report.map)
+    alone = mirror_pairs(tearing, surface, none, DEFAULT, second=tearing)  # the same map twice: itself
+    assert alone.report.map == "torn"
+    np.testing.assert_array_equal(alone.per_vertex()[1], torn_confidence)
+
+
 def test_find_mirror_pairs_refuses_landmark_pairs_alone():
     points, faces = synthetic.icosphere(2)
     with pytest.raises(ParameterError, match="pairs='landmarks' has no mirror map to return"):

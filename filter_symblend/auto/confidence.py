@@ -20,6 +20,8 @@ one error of an edge, below 0.5 (:data:`~filter_symblend.core.mirror_pairs.CONFI
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -64,46 +66,88 @@ def evidence(mirror: MirrorMap, sources: np.ndarray, config: AutoConfig, toleran
     return twins, listed, errors
 
 
+@dataclasses.dataclass(frozen=True)
+class _Candidate:
+    """One map's twins of the source vertices (m,): ``listed`` (m,) bool, ``corners`` and barycentric
+    ``weights`` (m, 3) on the input, ``point`` (m, 3) the twin there, ``errors`` (m, 3) the evidence in local
+    spacings, ``confidence`` (m,) (0 where not listed), ``landed`` (m,) bool: the prediction landed within the
+    tolerance."""
+
+    listed: np.ndarray
+    corners: np.ndarray
+    weights: np.ndarray
+    point: np.ndarray
+    errors: np.ndarray
+    confidence: np.ndarray
+    landed: np.ndarray
+
+    def where(self, better: np.ndarray, other: _Candidate) -> _Candidate:
+        """Per source, ``other``'s twin where ``better`` (m,) bool, else this one's; landed by either."""
+        rows = better[:, None]
+        return _Candidate(np.where(better, other.listed, self.listed), np.where(rows, other.corners, self.corners),
+                          np.where(rows, other.weights, self.weights), np.where(rows, other.point, self.point),
+                          np.where(rows, other.errors, self.errors),
+                          np.where(better, other.confidence, self.confidence), self.landed | other.landed)
+
+
+def _candidate(mirror: MirrorMap, geometry: Surface, sources: np.ndarray, forbidden: np.ndarray,
+               config: AutoConfig, rivals: list[Rival]) -> _Candidate:
+    """``mirror``'s twins of the ``sources`` on ``geometry``, none on a ``forbidden`` vertex, with their
+    confidence, lowered where ``rivals`` put the twin elsewhere (:func:`.rivals.rival_agreement`)."""
+    tolerance = config.landing_tolerance * geometry.diagonal
+    twins, listed, errors = evidence(mirror, sources, config, tolerance)
+    listed &= ~forbidden[twins.corners].any(axis=1)
+    corners, weights = twins.corners.copy(), twins.weights.copy()
+    # A twin that is a vertex (a mirrored tessellation: within a tenth of an edge, unambiguous, mutual) is that
+    # vertex, not the point of a triangle the prediction's rounding reached.
+    exact = twins.exact_vertex(config)
+    corners[exact] = twins.vertex[exact, None]
+    weights[exact] = [1.0, 0.0, 0.0]
+    point = np.einsum("kj,kji->ki", weights, geometry.points[corners])
+    confidence = np.exp(-0.5 * np.sum(errors**2, axis=1))
+    if rivals:
+        spacing = np.maximum(geometry.local_spacing[sources], 1e-12 * geometry.diagonal)
+        confidence *= rival_agreement(rivals, geometry.points[sources], point, spacing)
+    return _Candidate(listed, corners, weights, point, errors, np.where(listed, confidence, 0.0),
+                      twins.landing <= tolerance)
+
+
 def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, config: AutoConfig,
-                 rivals: list[Rival] = ()) -> MirrorPairs:
+                 rivals: list[Rival] = (), second: MirrorMap | None = None) -> MirrorPairs:
     """The twins of every pairable vertex of ``geometry`` (the input surface; ``mirror`` may live on a
     symmetrized output of it) that ``mirror`` mirrors, none on or toward a ``forbidden`` (N,) bool vertex;
     duplicates of a vertex take its twin. Other symmetries that fit about as well (``rivals``, maps on
-    ``geometry``) lower the confidence where they put the twin elsewhere (:func:`.rivals.rival_agreement`)."""
-    tolerance = config.landing_tolerance * geometry.diagonal
+    ``geometry``) lower the confidence where they put the twin elsewhere (:func:`.rivals.rival_agreement`).
+    A ``second`` map (the intrinsic mirror) gives the twin of each vertex where ``mirror``'s is doubtful
+    (confidence below CONFIDENT) and its own evidence is stronger: the confidence chooses per vertex (a hand the
+    chosen map of space lost, which the intrinsic mirror follows); where ``mirror`` is confident it stands."""
     sources = np.flatnonzero(geometry.usable & ~forbidden)
-    twins, listed, errors = evidence(mirror, sources, config, tolerance)
-    landed = np.count_nonzero(twins.landing <= tolerance)
-    listed &= ~forbidden[twins.corners].any(axis=1)
-    confidence = np.exp(-0.5 * np.sum(errors**2, axis=1))
+    chosen = _candidate(mirror, geometry, sources, forbidden, config, rivals)
+    name = mirror.name
+    if second is not None and second is not mirror:
+        other = _candidate(second, geometry, sources, forbidden, config, rivals)
+        better = (chosen.confidence < CONFIDENT) & (other.confidence > chosen.confidence)
+        if better.any():
+            chosen = chosen.where(better, other)
+            name = f"{mirror.name}; the {second.name} for {np.count_nonzero(better) / len(sources):.0%} of the vertices"
+    listed = chosen.listed
     rows = np.flatnonzero(listed)
     # Every vertex at a listed vertex's position (an OBJ's seam duplicates) takes its twin.
     row_of = np.full(len(geometry.points), -1)
     row_of[sources[rows]] = rows
     vertex = np.flatnonzero(row_of[geometry.representative] >= 0)
     rows = row_of[geometry.representative[vertex]]
-    corners, weights = twins.corners[rows].copy(), twins.weights[rows].copy()
-    # A twin that is a vertex (a mirrored tessellation: within a tenth of an edge, unambiguous, mutual) is that
-    # vertex, not the point of a triangle the prediction's rounding reached.
-    exact = twins.exact_vertex(config)[rows]
-    corners[exact] = twins.vertex[rows][exact, None]
-    weights[exact] = [1.0, 0.0, 0.0]
-    twin = np.einsum("kj,kji->ki", weights, geometry.points[corners])
-    if rivals:
-        first = geometry.representative[vertex]  # a duplicate: its first copy's
-        spacing = np.maximum(geometry.local_spacing[first], 1e-12 * geometry.diagonal)
-        agreement = np.ones(len(confidence))
-        agreement[rows] = rival_agreement(rivals, geometry.points[first], twin, spacing)
-        confidence = confidence * agreement
     pairable = max(len(sources), 1)
-    confident = confidence[listed] >= CONFIDENT
-    summary = MirrorMapReport(mirror.name, float(np.count_nonzero(listed) / pairable),
-                              float(np.count_nonzero(listed) / max(landed, 1)),
+    confident = chosen.confidence[listed] >= CONFIDENT
+    errors = chosen.errors[listed]
+    summary = MirrorMapReport(name, float(np.count_nonzero(listed) / pairable),
+                              float(np.count_nonzero(listed) / max(np.count_nonzero(chosen.landed), 1)),
                               float(np.count_nonzero(confident) / pairable), CONFIDENT,
                               dict(zip(("round_trip", "landing", "neighbours"),
-                                       np.median(errors[listed], axis=0).tolist() if listed.any() else [None] * 3)),
+                                       np.median(errors, axis=0).tolist() if listed.any() else [None] * 3)),
                               {rival.mirror.name: rival.share for rival in rivals})
-    return MirrorPairs(vertex, twin, corners, weights, confidence[rows], len(geometry.points), summary)
+    return MirrorPairs(vertex, chosen.point[rows], chosen.corners[rows], chosen.weights[rows],
+                       chosen.confidence[rows], len(geometry.points), summary)
 
 
 def doubtful_map_warning(report: MirrorMapReport) -> str | None:

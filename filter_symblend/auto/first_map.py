@@ -27,6 +27,8 @@ onto any surface lands much of it somewhere: 80 % of a bunny).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from ..core.mesh_graph import one_pair_per_vertex
@@ -78,7 +80,7 @@ def tessellation_map(surface: Surface, maps: list[MirrorMap], sources: np.ndarra
     return None
 
 
-def _intrinsic_map(surface: Surface, normal: np.ndarray, config: AutoConfig) -> MirrorMap | None:
+def intrinsic_mirror_map(surface: Surface, normal: np.ndarray, config: AutoConfig) -> MirrorMap | None:
     """The intrinsic mirror's sound pairs as a map (:mod:`.intrinsic_map`), the left side along ``normal``;
     None for a point cloud, a mesh without a spectrum, or too few pairs to start a field."""
     pairs = intrinsic_pairs(surface, config)
@@ -120,11 +122,22 @@ def registered_field(surface: Surface, sample: np.ndarray, field: MirrorField, c
     return field
 
 
-def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress=None):
-    """(the map that mirrors the most of the surface, {name: share mirrored} of every candidate tried, the
-    surface's best mirror plane (normal, offset), the other symmetries that mirror about as much
-    (:mod:`.rivals`)); SymmetryNotFoundError when none mirrors ``min_coverage`` of it. ``scored`` (m,): the
-    vertices the shares are measured on."""
+class FirstMap(NamedTuple):
+    """The map that mirrors the most of the surface (``map``), {name: share mirrored} of every candidate tried
+    (``shares``), the surface's best mirror plane (normal, offset), the other symmetries that mirror about as
+    much (``rivals``, :mod:`.rivals`), and the intrinsic mirror if it was computed (``intrinsic``: a second
+    opinion on each vertex's twin, :func:`.confidence.mirror_pairs`)."""
+
+    map: MirrorMap
+    shares: dict
+    plane: tuple
+    rivals: list[Rival]
+    intrinsic: MirrorMap | None = None
+
+
+def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress=None) -> FirstMap:
+    """The first mirror map (see the module doc); SymmetryNotFoundError when none mirrors ``min_coverage`` of
+    the surface. ``scored`` (m,): the vertices the shares are measured on."""
     planes = surface_mirror_planes(surface.points[surface.usable_index])
     rigid = [plane_map(surface, *plane, name="mirror plane" if rank == 1 else f"mirror plane {rank}")
              for rank, plane in enumerate(planes[:3], 1)]
@@ -135,11 +148,11 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress
     mirrored = tessellation_map(surface, ranked[:2], scored, config)
     if mirrored is not None:  # the tessellation mirrors itself: its own mirror, exact whatever the bend
         shares[mirrored.name] = coverage(mirrored, scored, config)
-        return mirrored, shares, planes[0], close_rivals(mirrored, rigid, shares, scored, config)
+        return FirstMap(mirrored, shares, planes[0], close_rivals(mirrored, rigid, shares, scored, config))
     if shares[ranked[0].name] >= config.plane_suffices:
         best = _refuse_or(ranked[0], shares, config)
-        return best, shares, planes[0], close_rivals(best, rigid, shares, scored, config)
-    intrinsic = _intrinsic_map(surface, ranked[0].normal, config)
+        return FirstMap(best, shares, planes[0], close_rivals(best, rigid, shares, scored, config))
+    intrinsic = intrinsic_mirror_map(surface, ranked[0].normal, config)
     if intrinsic is not None:
         shares[intrinsic.name] = coverage(intrinsic, scored, config)
     screening = _strided(surface, config.screening_samples)
@@ -175,12 +188,13 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress
     mirrored = tessellation_map(surface, [best], scored, config)
     if mirrored is not None:
         shares[mirrored.name] = coverage(mirrored, scored, config)
-        return mirrored, shares, planes[0], _rivals(mirrored, tried + [best], shares, scored, config)
+        return FirstMap(mirrored, shares, planes[0], _rivals(mirrored, tried + [best], shares, scored, config),
+                        intrinsic)
     rigid_share = max(shares[mirror.name] for mirror in rigid)
     # A plain map that mirrors min_coverage shows a symmetry up to the scan's noise; else the field must
     # prove it within its own precision.
     best = _refuse_or(best, shares, config, None if rigid_share >= config.min_coverage else scored)
-    return best, shares, planes[0], _rivals(best, tried, shares, scored, config)
+    return FirstMap(best, shares, planes[0], _rivals(best, tried, shares, scored, config), intrinsic)
 
 
 def _rivals(best: MirrorMap, tried: list[MirrorMap], shares: dict, scored: np.ndarray,

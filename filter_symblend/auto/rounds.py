@@ -34,7 +34,7 @@ from ..parameters import CORE, options_of
 from .confidence import doubtful_map_warning, mirror_pairs
 from .config import DEFAULT, AutoConfig
 from .field import MirrorField, field_centres, register
-from .first_map import coverage, first_map
+from .first_map import coverage, first_map, intrinsic_mirror_map
 from .intrinsic_start import cannot_start, intrinsic_start
 from .maps import MirrorMap, field_map, plane_map
 from .pairs import Constraints, as_landmarks, find_pairs, spread
@@ -214,10 +214,12 @@ def _paired(points: np.ndarray, faces: np.ndarray, options: dict, start: Landmar
     registration = spread(points, surface.usable_index, config.registration_samples)
     origin = {}  # how the rounds started: the first map's coverage and plane, or the intrinsic start
     history, messages, rivals = [], [], []
+    intrinsic = None  # the intrinsic mirror, where computed: the twin of a vertex where it has more evidence
     refusal = None  # no map of space mirrors enough of the surface (in articulated mode: the intrinsic start)
     if landmarks is None and start == "maps":
         try:
-            mirror, shares, plane, rivals = first_map(surface, scored, config, scaled_progress(progress, 0.0, 30.0))
+            mirror, shares, plane, rivals, intrinsic = first_map(surface, scored, config,
+                                                                 scaled_progress(progress, 0.0, 30.0))
             origin = {"coverage": shares, "surface_plane": plane}
             if rivals:
                 messages.append(rival_warning(mirror.name, shares[mirror.name], rivals))
@@ -237,6 +239,7 @@ def _paired(points: np.ndarray, faces: np.ndarray, options: dict, start: Landmar
         if refusal is not None:
             messages.append(INTRINSIC_START_WARNING)
         mirror = _output_map(surface, result, registration, config)
+        intrinsic = intrinsic_mirror_map(surface, result.report.plane.normal, config)
     elif landmarks is not None:
         result = solve(points, landmarks, core, scaled_progress(progress, 0.0, 20.0))
         best = surface_asymmetry(surface, result, scored)
@@ -297,7 +300,7 @@ def _paired(points: np.ndarray, faces: np.ndarray, options: dict, start: Landmar
         history.append(dataclasses.replace(entry, final=True))
     if progress is not None:
         progress(98.0, "every vertex's twin, with its confidence")
-    twins = mirror_pairs(source, surface, forbidden, config, rivals)
+    twins = mirror_pairs(source, surface, forbidden, config, rivals, intrinsic)
     doubtful = doubtful_map_warning(twins.report)
     if doubtful is not None:
         messages.append(doubtful)
