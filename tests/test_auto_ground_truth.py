@@ -59,14 +59,15 @@ def test_a_remeshed_cow_bent_strongly_is_not_refused(remeshed_cow):
 
 
 def test_a_swung_limb_left_asymmetric_by_a_map_of_space_is_restored_from_the_intrinsic_start(remeshed_cow):
-    """The remeshed cow with a hind leg swung 0.6 rad: the rounds from a map of space leave the leg unrestored
+    """The remeshed cow with a hind leg swung 0.9 rad: the rounds from a map of space leave the leg unrestored
     (99th percentile of the output's distance to its reflection above 2 % of the diagonal), so the articulated
     mode runs them again from the intrinsic start and keeps that output, the more mirror-symmetric; against
-    ground truth its error falls to about half (measured 1.36 -> 0.69 % of the diagonal, 100 landmark pairs
-    0.56 %), and a warning says that it rests on the intrinsic mirror."""
+    ground truth its error falls to about half (measured 2.00 -> 0.96 % of the diagonal, 100 landmark pairs
+    0.66 %), and a warning says that it rests on the intrinsic mirror. (Swung 0.6 rad, the map of space now
+    follows the leg: 0.62 %, 100 landmark pairs 0.56 %.)"""
     truth = remeshed_cow
     weights = synthetic.limb_weights(truth.points, **synthetic.LIMBS["cow"])
-    deformed = synthetic.random_rigid(synthetic.articulate_limb(truth.points, weights, 0.6), seed=7)
+    deformed = synthetic.random_rigid(synthetic.articulate_limb(truth.points, weights, 0.9), seed=7)
     maps_only = symmetrize(deformed, faces=truth.faces, pairs="auto", mode="articulated",
                            auto_config=AutoConfig(part_left_asymmetric=1.0))
     assert maps_only.report.auto_pairs.output_asymmetry_p99 > AutoConfig().part_left_asymmetric
@@ -79,8 +80,8 @@ def test_a_swung_limb_left_asymmetric_by_a_map_of_space_is_restored_from_the_int
     assert tried["maps_asymmetry"] == pytest.approx(maps_only.report.auto_pairs.output_asymmetry)
     alone = _landmarks_alone(deformed, *truth.landmarks(100), "articulated")
     errors = [truth.symmetry_error(p) for p in (maps_only.points, automatic.points, alone.points)]
-    print("limb swung 0.6 rad, symmetry error maps only / kept / 100 landmarks:", errors)
-    assert errors[1] < 0.6 * errors[0] and errors[1] < 1.5 * errors[2]
+    print("limb swung 0.9 rad, symmetry error maps only / kept / 100 landmarks:", errors)
+    assert errors[1] < 0.6 * errors[0] and errors[1] < 2.0 * errors[2]
 
 
 def test_when_the_intrinsic_start_fails_the_output_of_the_maps_stands_and_the_report_says_why(remeshed_cow,
@@ -92,7 +93,7 @@ def test_when_the_intrinsic_start_fails_the_output_of_the_maps_stands_and_the_re
         raise GeometryError("the intrinsic pairs fall\napart")
 
     weights = synthetic.limb_weights(remeshed_cow.points, **synthetic.LIMBS["cow"])
-    deformed = synthetic.random_rigid(synthetic.articulate_limb(remeshed_cow.points, weights, 0.6), seed=7)
+    deformed = synthetic.random_rigid(synthetic.articulate_limb(remeshed_cow.points, weights, 0.9), seed=7)
     monkeypatch.setattr(rounds, "_intrinsic_first_output", fails)
     with warnings.catch_warnings():
         warnings.simplefilter("error", SymblendWarning)  # nothing is said to rest on the intrinsic mirror

@@ -11,9 +11,9 @@ from scipy.spatial import cKDTree
 from filter_symblend import SymblendWarning, SymmetryNotFoundError
 from filter_symblend.auto.config import DEFAULT
 from filter_symblend.testing import synthetic
-from filter_symblend.auto.intrinsic_start import (DESCRIPTOR_AGREEMENT, cannot_start, descriptor_disagreement,
-                                                  intrinsic_start)
+from filter_symblend.auto.intrinsic_start import cannot_start, intrinsic_start
 from filter_symblend.auto.rounds import plane_distances, surface_asymmetry
+from filter_symblend.auto.spectral import DESCRIPTOR_AGREEMENT, descriptor_disagreement
 from filter_symblend.auto.surface import build_surface
 from filter_symblend.core.landmark_pairs import check_landmarks
 from filter_symblend.core.mirror_planes import surface_mirror_planes

@@ -112,17 +112,13 @@ class AutoConfig:
         "the intrinsic mirror is computed on a mesh of at most about this many vertices (larger ones are "
         "coarsened by vertex clustering): its 60 eigenfunctions vary over hundreds of vertices, and the "
         "eigensolver's cost grows faster than the size")
-    spectral_functions: int = _field(
-        60, "eigenfunctions",
-        "Laplace-Beltrami eigenfunctions the intrinsic map is refined on (ZoomOut's last size): fine enough to "
-        "tell a leg from its neighbour, coarse enough that a bend leaves them nearly unchanged")
-    spectral_start: int = _field(
-        12, "eigenfunctions",
-        "eigenfunctions on which the mirror's functional map is solved in closed form: the lowest ones, "
-        "least changed by a bend or a compression; fewer leave it undetermined where eigenvalues are close")
-    zoomout_step: int = _field(
-        6, "eigenfunctions",
-        "eigenfunctions added per ZoomOut step from spectral_start to spectral_functions (8 steps)")
+    zoomout_sizes: tuple = _field(
+        ((60, 6), (100, 8)), "(eigenfunctions, eigenfunctions per step)",
+        "sizes the intrinsic map is refined to by ZoomOut, each with its step: each first map gives a candidate "
+        "at each size, and the one that reverses the most of the surface is taken; coarse enough that a bend "
+        "leaves them nearly unchanged, fine enough to tell a hand from the hip it rests on (60 alone and 100 "
+        "alone were each best on some shapes: chosen on half of 58 BCICP shapes, checked on the other half, "
+        "docs/benchmarks.md)")
     descriptor_scales: int = _field(
         8, "heat kernel times",
         "heat kernel signatures, at times spread over the spectrum, that the mirror must preserve and that "

@@ -27,7 +27,7 @@ from scipy.spatial import cKDTree
 from .config import AutoConfig
 from .field import tukey_weights
 from .growth import affine_mirror_maps
-from .spectral import intrinsic_mirror, working_mesh
+from .spectral import CandidateMirror, WorkingMesh, candidate_mirrors, working_mesh
 from .surface import Surface
 
 
@@ -50,16 +50,27 @@ def robust_twins(x: np.ndarray, y: np.ndarray, config: AutoConfig) -> np.ndarray
     return affine_mirror_maps(x[neighbours], y[neighbours], weights, x, config.growth_ridge)[0]
 
 
+def spectral_candidates(surface: Surface, config: AutoConfig) -> tuple[WorkingMesh | None,
+                                                                      list[CandidateMirror] | None]:
+    """The working mesh of ``surface`` (a mesh) and its candidate intrinsic mirrors, the best first
+    (:func:`.spectral.candidate_mirrors`; None without a working mesh or a spectrum), computed once per surface
+    and ``config``: the first map and the intrinsic start both ask."""
+    def compute():
+        mesh = working_mesh(surface.points, surface.faces[surface.triangles], surface.usable, config)
+        return mesh, None if mesh is None else candidate_mirrors(mesh, config)
+    return surface.memo(("intrinsic mirrors", config), compute)
+
+
 def intrinsic_pairs(surface: Surface, config: AutoConfig) -> tuple[np.ndarray, np.ndarray] | None:
     """(positions (m, 3), twin positions (m, 3)) of the working mesh's vertices under the denoised intrinsic
     mirror (see the module doc), each pair once per direction; None for a point cloud or a mesh without a
     spectrum."""
     if not surface.is_mesh:
         return None
-    mesh = working_mesh(surface.points, surface.faces[surface.triangles], surface.usable, config)
-    twin = None if mesh is None else intrinsic_mirror(mesh, config)
-    if twin is None:
+    mesh, candidates = spectral_candidates(surface, config)
+    if not candidates:  # no working mesh, or no spectrum
         return None
+    twin = candidates[0].vertex_map  # the one that mirrors the most of the surface
     back = np.linalg.norm(mesh.points[twin[twin]] - mesh.points, axis=1)
     vertices = np.flatnonzero(back <= config.pair_consistency * surface.diagonal)
     if len(vertices) <= config.intrinsic_neighbours:

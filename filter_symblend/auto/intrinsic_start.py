@@ -7,7 +7,8 @@ map, and the intrinsic mirror used as a map of space (:mod:`.intrinsic_map`) mix
 arm along the torso). Its vertex pairs themselves are mostly right, for some sizes of the first
 functional map and not for others (the sign solve of :func:`.spectral.mirror_functional_map` is
 sensitive to the basis size when the pose is strong: a size may give another near-symmetry, or a map
-that folds a limb onto itself). So each size of ``STARTS`` gives a vertex map, refined by ZoomOut, and:
+that folds a limb onto itself). So each size of :data:`.spectral.STARTS` gives a vertex map, refined by ZoomOut,
+and (:func:`.spectral.candidate_mirrors`):
 
 - the shape must be intrinsically symmetric: the map keeps the heat kernel signatures,
   ``median |log HKS(x) - log HKS(m(x))|`` at most ``DESCRIPTOR_AGREEMENT`` x the same median between
@@ -36,23 +37,11 @@ from ..core.mirror_pairs import spread_left_sides
 from ..core.solve import SymmetrizationResult
 from ..errors import SymblendError
 from .config import AutoConfig
-from .spectral import (eigenbasis, heat_kernel_signatures, mirror_functional_map, point_map, reversed_share,
-                       reversed_triangles, working_mesh, zoomout)
+from .intrinsic_map import spectral_candidates
+from .spectral import DESCRIPTOR_AGREEMENT, CandidateMirror
 from .surface import Surface
 
-STARTS = (8, 12, 16, 20, 24)  # first functional map sizes tried (eigenfunctions), up to 40 % of spectral_functions
-# Symmetric shapes, posed or not, measured 0.011-0.055 (FAUST humans, homer); shapes with no mirror symmetry
-# 0.12-0.22 (the Stanford bunny, fandisk): the bound lies between, at their geometric middle (docs/benchmarks.md).
-DESCRIPTOR_AGREEMENT = 0.08
 PAIRS = 300  # pairs solved per start: a coarse intrinsic map gives a few hundred sound ones on a 5,000-vertex body
-
-
-def descriptor_disagreement(signatures: np.ndarray, vertex_map: np.ndarray) -> float:
-    """median |log s(x) - log s(m(x))| / median |log s(x) - log s(y)| over random pairs (x, y): 0 for a map
-    that keeps the signatures ``signatures`` (n, d) > 0, about 1 for a random map."""
-    logs = np.log(signatures)
-    shuffled = np.random.default_rng(0).permutation(len(logs))
-    return float(np.median(np.abs(logs - logs[vertex_map])) / np.median(np.abs(logs - logs[shuffled])))
 
 
 def intrinsic_start(surface: Surface, config: AutoConfig, solve_pairs: Callable[[np.ndarray, np.ndarray], SymmetrizationResult],
@@ -63,27 +52,18 @@ def intrinsic_start(surface: Surface, config: AutoConfig, solve_pairs: Callable[
     tried = {"starts": {}}
     if not surface.is_mesh:
         return None, tried
-    mesh = working_mesh(surface.points, surface.faces[surface.triangles], surface.usable, config)
-    basis = None if mesh is None else eigenbasis(mesh.points, mesh.faces, config.spectral_functions)
-    if basis is None:
+    mesh, candidates = spectral_candidates(surface, config)
+    if candidates is None:
         return None, tried
-    signatures = heat_kernel_signatures(basis, config.descriptor_scales)
-    maps = {}
-    for start in STARTS:
-        if start + 2 > len(basis.values):
-            break
-        functional = mirror_functional_map(mesh.points, mesh.faces, basis, start, config)
-        vertex_map = zoomout(basis, point_map(basis.functions[:, :start], functional), start, len(basis.values),
-                             config.zoomout_step)
-        entry = tried["starts"][start] = {"descriptor_disagreement": descriptor_disagreement(signatures, vertex_map)}
-        if entry["descriptor_disagreement"] <= DESCRIPTOR_AGREEMENT:
-            reversed_there = reversed_triangles(mesh.points, mesh.faces, vertex_map)
-            entry["reversed_share"] = reversed_share(mesh.points, mesh.faces, reversed_there)
-            maps[start] = vertex_map
+    for candidate in sorted(candidates, key=lambda mirror: (mirror.size, mirror.start)):
+        entry = tried["starts"][_key(candidate)] = {"descriptor_disagreement": candidate.descriptor_disagreement}
+        if candidate.keeps_descriptors:
+            entry["reversed_share"] = candidate.reversed_share
     # each vertex of the working mesh stands for the usable input vertex nearest it
     vertex_of = surface.usable_index[surface.vertex_tree.query(mesh.points)[1]]
-    for start in sorted(maps, key=lambda size: -tried["starts"][size]["reversed_share"]):
-        entry, vertex_map = tried["starts"][start], maps[start]
+    for candidate in filter(lambda mirror: mirror.keeps_descriptors, candidates):
+        vertex_map = candidate.vertex_map
+        entry = tried["starts"][_key(candidate)]
         mutual = vertex_map[vertex_map] == np.arange(len(vertex_map))
         left = spread_left_sides(mesh.points, mesh.points[vertex_map], mutual, PAIRS, surface.diagonal)
         left, right = vertex_of[left], vertex_of[vertex_map[left]]
@@ -97,9 +77,14 @@ def intrinsic_start(surface: Surface, config: AutoConfig, solve_pairs: Callable[
             entry["refused"] = str(error)
             continue
         entry["surface_asymmetry"] = asymmetry_of(result)
-        tried["chosen"] = start
+        tried["chosen"] = _key(candidate)
         return result, tried
     return None, tried
+
+
+def _key(candidate: CandidateMirror) -> str:
+    """A candidate's name in the report: its first size and its ZoomOut size ("12 -> 100")."""
+    return f"{candidate.start} -> {candidate.size}"
 
 
 def cannot_start(tried: dict) -> str:

@@ -10,7 +10,7 @@ compression, a shape only partly mirrored by the first map), the output is more 
 input, so the next map is a field registered on the output, from its own plane, and pairs more of it.
 The rounds stop when the map pairs ``plane_suffices`` of the sample, when the output no longer moves,
 or when a round leaves it less mirror-symmetric than the one before (that round is not kept). The last
-solve takes ``auto_pair_count`` pairs from the best round's map. Every result carries that map: each
+solve takes ``auto_pair_count`` pairs from the best round's map, and is kept by the same rule. Every result carries that map: each
 vertex's twin with a confidence (:mod:`.confidence`). In ``mode='articulated'``, rounds from a map of space
 that leave a part of the output far from its mirror image (a limb no smooth map followed) are run again
 from the intrinsic start, and the more mirror-symmetric output is kept.
@@ -147,7 +147,10 @@ def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: d
     (the 99th percentile of its distance to its own reflection above ``part_left_asymmetric``: a limb that
     no smooth map followed), the rounds are run again from the intrinsic start, and the output that is the
     more mirror-symmetric (RMS) is kept; the report's ``intrinsic_start`` says why and what each gave."""
-    first = _paired(points, faces, options, "maps" if landmarks is None else landmarks, excluded, progress, config)
+    surface, forbidden = _surface(points, faces, landmarks, excluded, config)
+    excluded_count = 0 if excluded is None else len(excluded)
+    first = _paired(points, surface, forbidden, excluded_count, options, "maps" if landmarks is None else landmarks,
+                    progress, config)
     auto = first.report.auto_pairs
     if (landmarks is not None or options["mode"] != "articulated" or auto.intrinsic_start is not None
             or auto.output_asymmetry_p99 <= config.part_left_asymmetric):
@@ -158,7 +161,7 @@ def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: d
     why = {"because": f"the rounds from the {auto.mirror_map.map} left a part asymmetric (99th percentile "
                       f"{auto.output_asymmetry_p99:.3g} of the diagonal)", "maps_asymmetry": auto.output_asymmetry}
     try:
-        second = _paired(points, faces, options, "intrinsic", excluded, None, config)
+        second = _paired(points, surface, forbidden, excluded_count, options, "intrinsic", None, config)
     except SymblendError as error:  # the maps' output stands; the report says why the other is missing
         second, why["failed"] = None, " ".join(str(error).split())
     if second is None:
@@ -184,15 +187,11 @@ def _warned(result: SymmetrizationResult) -> SymmetrizationResult:
     return result
 
 
-def _paired(points: np.ndarray, faces: np.ndarray, options: dict, start: LandmarkPairs | str,
-            excluded: np.ndarray | None, progress, config: AutoConfig) -> SymmetrizationResult | None:
-    """The rounds, started from the user's landmark pairs (``start``), from the first map of space
-    (``"maps"``: the intrinsic start if none mirrors enough, in articulated mode) or from the intrinsic start
-    (``"intrinsic"``: None if it gives nothing); warnings in the report, not raised."""
-    landmarks = start if isinstance(start, LandmarkPairs) else None
-    clock = time.perf_counter()
-    n = len(points)
-    forbidden = np.zeros(n, dtype=bool)
+def _surface(points: np.ndarray, faces: np.ndarray, landmarks: LandmarkPairs | None, excluded: np.ndarray | None,
+             config: AutoConfig) -> tuple[Surface, np.ndarray]:
+    """(the surface the automatic pairs live on, forbidden (N,) bool: the vertices no automatic pair may use, the
+    ``excluded`` ones and the user's ``landmarks``); GeometryError if fewer than 4 vertices can pair."""
+    forbidden = np.zeros(len(points), dtype=bool)
     if excluded is not None:
         forbidden[excluded] = True
     if landmarks is not None:
@@ -206,6 +205,20 @@ def _paired(points: np.ndarray, faces: np.ndarray, options: dict, start: Landmar
                                 "the mesh before it was flattened, or landmark pairs.")
         raise GeometryError(f"The mesh has {len(surface.usable_index)} vertices that can be paired (on a triangle "
                             "with an area, not excluded); automatic pairs need more.")
+    return surface, forbidden
+
+
+def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, excluded_count: int, options: dict,
+            start: LandmarkPairs | str, progress, config: AutoConfig) -> SymmetrizationResult | None:
+    """The rounds on ``surface`` (:func:`_surface`, with its ``forbidden`` vertices, ``excluded_count`` of them
+    excluded by the user; the same surface for both runs, so the intrinsic mirrors are computed once), started
+    from the user's
+    landmark pairs (``start``), from the first map of space (``"maps"``: the intrinsic start if none mirrors
+    enough, in articulated mode) or from the intrinsic start (``"intrinsic"``: None if it gives nothing);
+    warnings in the report, not raised."""
+    landmarks = start if isinstance(start, LandmarkPairs) else None
+    clock = time.perf_counter()
+    n = len(points)
     core = options_of(options, CORE)
     rounds_allowed = options["auto_iterations"]
     step = 70.0 / (rounds_allowed + 2)
@@ -296,8 +309,11 @@ def _paired(points: np.ndarray, faces: np.ndarray, options: dict, start: Landmar
         # The rounds found the twins with fewer pairs; the output is solved with all of them.
         if progress is not None:
             progress(30.0 + rounds_allowed * step, f"automatic pairs: the solve with {count} pairs")
-        result, entry = attempt(source, count, 30.0 + rounds_allowed * step)
-        history.append(dataclasses.replace(entry, final=True))
+        candidate, entry = attempt(source, count, 30.0 + rounds_allowed * step)
+        better = entry.surface_asymmetry <= best * (1.0 + 1e-9)  # as a round: one less symmetric is not kept
+        history.append(dataclasses.replace(entry, final=True, kept=better))
+        if better:
+            result = candidate
     if progress is not None:
         progress(98.0, "every vertex's twin, with its confidence")
     twins = mirror_pairs(source, surface, forbidden, config, rivals, intrinsic)
@@ -312,7 +328,7 @@ def _paired(points: np.ndarray, faces: np.ndarray, options: dict, start: Landmar
         pair_count=result.report.pair_count - given[0], midline_count=result.report.midline_count - given[1],
         rounds=tuple(history), stopped=stopped, twins_are=kept[-1].search.twins_are if kept else None,
         consistency=kept[-1].search.consistency if kept else None, mirror_map=twins.report,
-        excluded_vertices=int(0 if excluded is None else len(excluded)), output_asymmetry=rms, output_asymmetry_p99=p99,
+        excluded_vertices=int(excluded_count), output_asymmetry=rms, output_asymmetry_p99=p99,
         warnings=tuple(messages), **origin)
     return _final(points, surface.representative, result, landmarks, report, clock, twins)
 

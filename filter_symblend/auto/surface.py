@@ -55,6 +55,14 @@ class Surface:
         self.usable = usable
         self.usable_index = np.flatnonzero(usable)
 
+    def memo(self, key, compute):
+        """``compute()``, computed once per hashable ``key`` for this surface: costly derived data that two
+        stages need (the intrinsic mirrors)."""
+        memos = self.__dict__.setdefault("_memos", {})
+        if key not in memos:
+            memos[key] = compute()
+        return memos[key]
+
     def moved(self, points: np.ndarray) -> "Surface":
         """The same surface (welded triangles, usable vertices) at the positions ``points`` (N, 3), as a
         symmetrized output is: its triangles and local vertex spacing are taken as the input's."""

@@ -8,6 +8,8 @@ import numpy as np
 import pymeshlab
 from scipy.spatial import cKDTree
 
+from ..core.mirror_fill import TriangleSurface
+from ..core.surface_points import barycentric
 from ..errors import LandmarkError
 from ..measures.hausdorff import two_way_distance
 from ..measures.surface_asymmetry import CHECK_SAMPLES, before_and_after, pairs_plane
@@ -31,7 +33,7 @@ def compare_layers(ms: pymeshlab.MeshSet, before: int, after: int, samples: int 
 def solved_planes(before: pymeshlab.Mesh, after: pymeshlab.Mesh) -> tuple:
     """The planes (measures/surface_asymmetry.pairs_plane) on ``before`` and on ``after`` of the pairs the
     filter solved, as its output carries them: the automatic twins (TWIN_ATTRIBUTE, points of the output;
-    on the input, each twin's nearest output vertex), else the landmark pairs of the default pair attribute
+    on the input, the same material points), else the landmark pairs of the default pair attribute
     on the output or the input (both sides weighted above 0). (None, None) without them, or when the two
     meshes do not share their vertices (not a run's input and output)."""
     if before.vertex_number() != after.vertex_number():
@@ -40,8 +42,8 @@ def solved_planes(before: pymeshlab.Mesh, after: pymeshlab.Mesh) -> tuple:
     twins = _point_attribute(after, TWIN_ATTRIBUTE)
     if twins is not None:
         vertex = np.flatnonzero(np.isfinite(twins).all(axis=1))
-        twin_vertex = cKDTree(moved).query(twins[vertex])[1]
-        return pairs_plane(points[vertex], points[twin_vertex]), pairs_plane(moved[vertex], twins[vertex])
+        return pairs_plane(points[vertex], _on_input(twins[vertex], moved, points, after.face_matrix())), \
+            pairs_plane(moved[vertex], twins[vertex])
     for mesh in (after, before):
         try:
             pairs = read_landmark_attributes(mesh)
@@ -50,6 +52,17 @@ def solved_planes(before: pymeshlab.Mesh, after: pymeshlab.Mesh) -> tuple:
         left, right = pairs.both_sides()
         return pairs_plane(points[left], points[right]), pairs_plane(moved[left], moved[right])
     return None, None
+
+
+def _on_input(twins: np.ndarray, moved: np.ndarray, points: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """The twins (k, 3), points of the output surface (``moved`` (N, 3), ``faces``), as the same material points of
+    the input (``points`` (N, 3)): by their barycentric weights in the output triangle they lie on (each twin's
+    nearest vertex instead without triangles)."""
+    if not len(faces):
+        return points[cKDTree(moved).query(twins)[1]]
+    face, on_surface, _ = TriangleSurface(moved, faces).nearest(twins)
+    weights = barycentric(moved[faces[face]], on_surface)
+    return np.einsum("kj,kji->ki", weights, points[faces[face]])
 
 
 def _point_attribute(mesh: pymeshlab.Mesh, name: str) -> np.ndarray | None:
