@@ -110,7 +110,7 @@ class AutoConfig:
     spectral_vertices: int = _field(
         6000, "vertices",
         "the intrinsic mirror is computed on a mesh of at most about this many vertices (larger ones are "
-        "coarsened by vertex clustering): its 60 eigenfunctions vary over hundreds of vertices, and the "
+        "coarsened by vertex clustering): its 60-100 eigenfunctions vary over dozens of vertices, and the "
         "eigensolver's cost grows faster than the size")
     zoomout_sizes: tuple = _field(
         ((60, 6), (100, 8)), "(eigenfunctions, eigenfunctions per step)",
