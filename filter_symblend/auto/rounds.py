@@ -10,10 +10,10 @@ compression, a shape only partly mirrored by the first map), the output is more 
 input, so the next map is a field registered on the output, from its own plane, and pairs more of it.
 The rounds stop when the map pairs ``plane_suffices`` of the sample, when the output no longer moves,
 or when a round leaves it less mirror-symmetric than the one before (that round is not kept). The last
-solve takes ``auto_pair_count`` pairs from the best round's map, and is kept by the same rule. Every result carries that map: each
-vertex's twin with a confidence (:mod:`.confidence`). In ``mode='articulated'``, rounds from a map of space
-that leave a part of the output far from its mirror image (a limb no smooth map followed) are run again
-from the intrinsic start, and the more mirror-symmetric output is kept.
+solve takes ``auto_pair_count`` pairs from the best round's map, and is kept by the same rule. Every result
+carries that map: each vertex's twin with a confidence (:mod:`.confidence`). In ``mode='articulated'``,
+rounds from a map of space that leave a part of the output far from its mirror image (a limb no smooth map
+followed) are run again from the intrinsic start, and the more mirror-symmetric output is kept.
 """
 
 from __future__ import annotations
@@ -212,10 +212,9 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
             start: LandmarkPairs | str, progress, config: AutoConfig) -> SymmetrizationResult | None:
     """The rounds on ``surface`` (:func:`_surface`, with its ``forbidden`` vertices, ``excluded_count`` of them
     excluded by the user; the same surface for both runs, so the intrinsic mirrors are computed once), started
-    from the user's
-    landmark pairs (``start``), from the first map of space (``"maps"``: the intrinsic start if none mirrors
-    enough, in articulated mode) or from the intrinsic start (``"intrinsic"``: None if it gives nothing);
-    warnings in the report, not raised."""
+    from the user's landmark pairs (``start``), from the first map of space (``"maps"``: the intrinsic start if
+    none mirrors enough, in articulated mode) or from the intrinsic start (``"intrinsic"``: None if it gives
+    nothing); warnings in the report, not raised."""
     landmarks = start if isinstance(start, LandmarkPairs) else None
     clock = time.perf_counter()
     n = len(points)

@@ -294,20 +294,13 @@ def candidate_mirrors(mesh: WorkingMesh, config: AutoConfig) -> list[CandidateMi
     found = []
     for size, step in config.zoomout_sizes:
         size = min(size, len(basis.values))
+        truncated = Eigenbasis(basis.values[:size], basis.functions[:, :size], basis.mass)
         for start in STARTS:
             if start + 2 > size:
                 break
-            truncated = Eigenbasis(basis.values[:size], basis.functions[:, :size], basis.mass)
             functional = mirror_functional_map(mesh.points, mesh.faces, truncated, start, config)
             vertex_map = zoomout(truncated, point_map(truncated.functions[:, :start], functional), start, size, step)
             found.append(CandidateMirror(
                 start, size, vertex_map, descriptor_disagreement(signatures, vertex_map),
                 reversed_share(mesh.points, mesh.faces, reversed_triangles(mesh.points, mesh.faces, vertex_map))))
     return sorted(found, key=lambda mirror: -mirror.reversed_share)
-
-
-def intrinsic_mirror(mesh: WorkingMesh, config: AutoConfig) -> np.ndarray | None:
-    """(n,) the intrinsic mirror of ``mesh`` as a vertex map of its vertices: the candidate that reverses the
-    most of the surface (:func:`candidate_mirrors`); None without a spectrum."""
-    candidates = candidate_mirrors(mesh, config)
-    return candidates[0].vertex_map if candidates else None
