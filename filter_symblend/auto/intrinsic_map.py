@@ -64,9 +64,15 @@ def spectral_candidates(surface: Surface, config: AutoConfig) -> tuple[WorkingMe
 def intrinsic_pairs(surface: Surface, config: AutoConfig) -> tuple[np.ndarray, np.ndarray] | None:
     """(positions (m, 3), twin positions (m, 3)) of the working mesh's vertices under the denoised intrinsic
     mirror (see the module doc), each pair once per direction; None for a point cloud or a mesh without a
-    spectrum."""
+    spectrum. Computed once per surface and ``config`` (the first map, the intrinsic start's rounds and the
+    second run of the rounds all ask)."""
     if not surface.is_mesh:
         return None
+    return surface.memo(("intrinsic pairs", config), lambda: _denoised_pairs(surface, config))
+
+
+def _denoised_pairs(surface: Surface, config: AutoConfig) -> tuple[np.ndarray, np.ndarray] | None:
+    """:func:`intrinsic_pairs`, computed."""
     mesh, candidates = spectral_candidates(surface, config)
     if not candidates:  # no working mesh, or no spectrum
         return None

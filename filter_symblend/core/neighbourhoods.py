@@ -85,6 +85,7 @@ def _symmetric(n: int, i: np.ndarray, j: np.ndarray, weight: np.ndarray) -> sp.c
     np.cumsum(np.bincount(rows, minlength=n), out=indptr[1:])
     return sp.csr_matrix((data[order], columns[order], indptr), shape=(n, n))
 
+
 def scaled_weights(weights: sp.csr_matrix, row: np.ndarray, column: np.ndarray) -> sp.csr_matrix:
     """diag(row) @ weights @ diag(column), by scaling the stored values (building
     scipy.sparse.diags for this was a measured hotspot)."""
