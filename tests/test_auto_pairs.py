@@ -564,7 +564,7 @@ def test_a_rival_lowers_each_twins_confidence_by_how_far_it_puts_the_twin():
     from filter_symblend.auto.rivals import Rival, rival_agreement
     from filter_symblend.auto.surface import build_surface
     points, faces = _box()
-    surface = build_surface(points, faces, config=AutoConfig())
+    surface = build_surface(points, faces)
     chosen, rival = (plane_map(surface, normal, 0.0) for normal in np.eye(3)[:2])
     twins = chosen.predict(points)
     spacing = surface.local_spacing

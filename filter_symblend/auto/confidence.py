@@ -28,7 +28,7 @@ from scipy.spatial import cKDTree
 from ..core.mirror_pairs import CONFIDENT, DOUBTFUL_SHARE, MirrorPairs
 from ..core.report import MirrorMapReport
 from .config import AutoConfig
-from .growth import affine_mirror_maps
+from .growth import LOCAL_MAP_RIDGE, affine_mirror_maps
 from .maps import MirrorMap
 from .rivals import Rival, rival_agreement
 from .surface import Surface
@@ -43,7 +43,7 @@ def _neighbour_misfit(positions: np.ndarray, twins: np.ndarray, config: AutoConf
     _, nearest = cKDTree(positions).query(positions, k=k)
     others = nearest[:, 1:]
     predicted, _ = affine_mirror_maps(positions[others], twins[others], np.ones(others.shape), positions,
-                                      config.growth_ridge)
+                                      LOCAL_MAP_RIDGE)
     return np.linalg.norm(predicted - twins, axis=1)
 
 

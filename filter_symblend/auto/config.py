@@ -90,9 +90,6 @@ class AutoConfig:
         0.05, "share of the output's mirror asymmetry",
         "a round that makes the output less than 5 % more mirror-symmetric than the round before is the "
         "last: the rounds converge geometrically, and the next would gain less still")
-    converged_change: float = _field(
-        1e-9, "x bounding-box diagonal",
-        "the rounds stop when the output moves less than this: numerically the same output")
     coincident: float = _field(
         1e-9, "x bounding-box diagonal",
         "positions closer than this are one position (rounding); also the least precision a map is asked for")
@@ -103,10 +100,6 @@ class AutoConfig:
         "start is tried too: about the geometric middle (1.8 %) of the remeshed cow's unrestored swung legs "
         "(3.2 and 8.3 %) and the restored bends and legs of it and of spot (at most 1.0 %); checked on the BCICP "
         "shapes paired by maps of space (sound: at most 1.6 %; four TOSCA dogs above it, 4.5-12.5 %)")
-    widenings: int = _field(
-        4, "doublings",
-        "times theta_width may double where the automatic pairs' neighbourhoods are flat (a straight outline), "
-        "which the user did not place and cannot move")
     spectral_vertices: int = _field(
         6000, "vertices",
         "the intrinsic mirror is computed on a mesh of at most about this many vertices (larger ones are "
@@ -119,28 +112,10 @@ class AutoConfig:
         "leaves them nearly unchanged, fine enough to tell a hand from the hip it rests on (60 alone and 100 "
         "alone were each best on some shapes: chosen on half of 58 BCICP shapes, checked on the other half, "
         "docs/benchmarks.md)")
-    descriptor_scales: int = _field(
-        8, "heat kernel times",
-        "heat kernel signatures, at times spread over the spectrum, that the mirror must preserve and that "
-        "enter its orientation term; each is a different even function of the shape")
-    commutativity_weight: float = _field(
-        1.0, "x the descriptor term",
-        "weight of the functional map's commutation with the Laplacian, relative to the descriptor and "
-        "orientation terms (each scaled to the descriptors' size): equal footing")
     pair_consistency: float = _field(
         0.02, "x bounding-box diagonal",
         "an intrinsic vertex pair is used (as a map, or to start a mirror field) only if the map sends the "
         "twin back within this of the vertex (twice an intrinsic map's typical error on a bent shape)")
-    intrinsic_neighbours: int = _field(
-        24, "pairs",
-        "intrinsic vertex pairs each robust local map of the intrinsic mirror is fitted to: twice "
-        "local_neighbours, since up to half of them may be a vertex off (ZoomOut on a thin limb) and the "
-        "reweighting needs the right ones to outnumber any wrong ones that agree")
-    intrinsic_rounds: int = _field(
-        8, "reweighting rounds",
-        "rounds of Tukey reweighting of each robust local map of the intrinsic mirror: the pairs a vertex "
-        "off lose their weight in a few; on a cow's swung leg, where the mirror is rigid, the maps then land "
-        "within 1e-4 of the spacing of the exact twins")
     field_centres: int = _field(
         200, "kernel centres",
         "Gaussian centres of a mirror field, spread over the surface: a few per kernel width in each direction "
@@ -153,23 +128,11 @@ class AutoConfig:
         10, "ICP iterations per width",
         "point-to-plane ICP converges in a few iterations where the surface is curved; 10 leave it nearly "
         "still where it is flat (the rounds refine the map on the output)")
-    field_converged: float = _field(
-        1e-5, "x bounding-box diagonal",
-        "the registration stops when its images move less than this (RMS) in an iteration: a tenth of the "
-        "precision the pairs need")
-    field_ridge: float = _field(
-        1e-5, "x the normal matrix's mean diagonal",
-        "ridge of a mirror field's least squares: enough to keep the system invertible where centres see no "
-        "data, too little to pull a bend's large displacements back toward the plane")
     involution_weight: float = _field(
         0.1, "x the point-to-plane term",
         "weight of m(m(x)) = x in the registration: without it a map may fold several regions onto one "
         "(each lands on the surface); as strong as the data, it holds the map where it started, and ICP "
         "creeps (a tenth: the median twin error on a bent cow half that at full weight)")
-    robust_rounds: int = _field(
-        4, "reweighting rounds",
-        "rounds of Tukey reweighting when a field is fitted to a rough map's pairs: wrong pairs lose their "
-        "weight in two or three")
     facing: float = _field(
         0.5, "cosine",
         "an image counts in the registration only if the surface where it lands faces within 60 degrees of "
@@ -186,70 +149,6 @@ class AutoConfig:
         1500, "vertices",
         "vertices the winning mirror field is registered on: enough for every kernel centre to see several "
         "of them within a width")
-    cpd_min_deviation: float = _field(
-        0.3, "x mean vertex spacing",
-        "the coherent point drift's mixture spread never falls below this: below a third of the spacing its "
-        "posteriors pick single vertices and the drift follows the sampling, not the shape")
-    cpd_samples: int = _field(
-        1000, "vertices",
-        "points of the coherent point drift registration (its cost grows with their square)")
-    cpd_iterations: int = _field(
-        100, "EM iterations",
-        "most iterations of the registration's expectation-maximization; it stops earlier once the mixture's "
-        "spread and the centres stop changing")
-    cpd_width: float = _field(
-        3.0, "x the sample's RMS radius",
-        "kernel width of the drift's displacement field: smooth over a third of the shape, so that it moves "
-        "whole parts, not single points")
-    cpd_smoothness: float = _field(
-        2.0, "the paper's lambda",
-        "weight of the drift field's smoothness: coherent point drift's published default")
-    cpd_normal_weight: float = _field(
-        3.0, "kappa",
-        "normal term of the mixture weights, exp(kappa (cos - 1)): a point facing the other way weighs e^-6 "
-        "as much, and the field cannot simply undo the reflection")
-    cpd_outliers: float = _field(
-        0.1, "share",
-        "share of the data explained by the mixture's uniform outlier term: coherent point drift's default")
-    cpd_rank: int = _field(
-        200, "eigenvectors",
-        "leading eigenvectors of the drift's kernel matrix kept (the fast variant of the paper)")
-    cpd_tolerance: float = _field(
-        1e-5, "relative change",
-        "the drift stops when the mixture's variance changes by less than this fraction")
-    cpd_step: float = _field(
-        1e-3, "x the mixture's least deviation",
-        "and when the centres move by less than this")
-    cpd_pool: int = _field(
-        20_000, "vertices",
-        "the drift's sample is drawn by farthest-point sampling from at most this many evenly strided vertices")
-    growth_frontier: float = _field(
-        3.0, "x the median vertex spacing",
-        "unpaired vertices this close to a pair are tried in a wave of the exact-vertex growth: the ring "
-        "around the pairs and the next")
-    growth_ridge: float = _field(
-        0.05, "x the neighbourhood's spread",
-        "pull of each local affine mirror map toward its best improper rigid map: keeps a map of a nearly "
-        "flat patch determined without stiffening a curved one")
-    growth_passes: int = _field(
-        4, "passes",
-        "prune-and-grow passes at most: each removes what the one before grew wrong, and none was needed "
-        "beyond the third")
-    mirror_coverage: float = _field(
-        0.95, "share of the vertices",
-        "a growth of the tessellation's mirror must pair this share of the vertices: all but a strip along "
-        "the midline, where a symmetric model may be triangulated one way only")
-    seed_growths: int = _field(
-        12, "growths",
-        "connectivity growths tried at most per group of pieces, each from a pair the ones before do not "
-        "explain: one right seed among many wrong ones is enough")
-    least_paired_neighbours: int = _field(
-        2, "neighbours",
-        "a vertex's twin is read off the connectivity once this many of its neighbours are paired: with one, "
-        "every unpaired neighbour of that neighbour's twin would fit")
-    point_cloud_neighbours: int = _field(
-        8, "points",
-        "neighbours whose mean distance is a point cloud's local spacing")
 
     @classmethod
     def describe(cls) -> str:

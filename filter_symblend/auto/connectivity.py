@@ -17,7 +17,16 @@ import numpy as np
 import scipy.sparse as sparse
 
 from ..core.mesh_graph import one_pair_per_vertex
-from .config import AutoConfig
+
+# A growth of the tessellation's mirror must pair this share of the vertices: all but a strip along the
+# midline, where a symmetric model may be triangulated one way only.
+MIRROR_COVERAGE = 0.95
+# Growths tried at most per group of pieces, each from a pair the ones before do not explain: one right
+# seed among many wrong ones is enough.
+SEED_GROWTHS = 12
+# A vertex's twin is read off the connectivity once this many of its neighbours are paired: with one,
+# every unpaired neighbour of that neighbour's twin would fit.
+LEAST_PAIRED_NEIGHBOURS = 2
 
 
 def _neighbours(adjacency: sparse.csr_matrix, vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -94,15 +103,14 @@ def grow_by_connectivity(adjacency: sparse.csr_matrix, partner: np.ndarray, leas
     return partner
 
 
-def tessellation_mirror(adjacency: sparse.csr_matrix, partner: np.ndarray, usable: np.ndarray,
-                        config: AutoConfig) -> np.ndarray | None:
+def tessellation_mirror(adjacency: sparse.csr_matrix, partner: np.ndarray, usable: np.ndarray) -> np.ndarray | None:
     """The mirror automorphism of a tessellation that mirrors itself, grown from single ring-consistent
     pairs of ``partner`` (N,) with their rings, or None.
 
     A growth stays in the pieces (connected components) its seed pair joins, a piece and its mirror
     piece, or one piece its own mirror. For each such group the growth kept is the one that pairs
-    ``config.mirror_coverage`` of its ``usable`` (N,) bool vertices and agrees with the most pairs of ``partner``;
-    seeds are tried until every seed is explained or ``config.seed_growths`` growths have run per group.
+    ``MIRROR_COVERAGE`` of its ``usable`` (N,) bool vertices and agrees with the most pairs of ``partner``;
+    seeds are tried until every seed is explained or ``SEED_GROWTHS`` growths have run per group.
     The groups' maps together must pair that share of all the usable vertices.
     """
     from scipy.sparse.csgraph import connected_components
@@ -120,13 +128,13 @@ def tessellation_mirror(adjacency: sparse.csr_matrix, partner: np.ndarray, usabl
         ring = np.concatenate([[seed], adjacency.indices[adjacency.indptr[seed]:adjacency.indptr[seed + 1]]])
         start = np.full(n, -1)
         start[ring], start[partner[ring]] = partner[ring], ring
-        grown = grow_by_connectivity(adjacency, start, config.least_paired_neighbours)
+        grown = grow_by_connectivity(adjacency, start, LEAST_PAIRED_NEIGHBOURS)
         members = usable & np.isin(piece, group)
         agreement = int(np.count_nonzero((grown == partner) & (partner >= 0)))
-        if np.mean(grown[members] >= 0) >= config.mirror_coverage and agreement > best.get(group, (-1, None))[0]:
+        if np.mean(grown[members] >= 0) >= MIRROR_COVERAGE and agreement > best.get(group, (-1, None))[0]:
             best[group] = (agreement, grown)
         seeds = seeds[(grown[seeds] != partner[seeds])]
-        exhausted = [g for g, count in tries.items() if count >= config.seed_growths]
+        exhausted = [g for g, count in tries.items() if count >= SEED_GROWTHS]
         if exhausted:
             stuck = np.isin(piece[seeds], [g[0] for g in exhausted]) | np.isin(piece[seeds], [g[1] for g in exhausted])
             seeds = seeds[~stuck]
@@ -135,4 +143,4 @@ def tessellation_mirror(adjacency: sparse.csr_matrix, partner: np.ndarray, usabl
     mirrored = np.full(n, -1)
     for _, grown in best.values():
         mirrored = np.where(mirrored >= 0, mirrored, grown)
-    return mirrored if np.mean(mirrored[usable] >= 0) >= config.mirror_coverage else None
+    return mirrored if np.mean(mirrored[usable] >= 0) >= MIRROR_COVERAGE else None

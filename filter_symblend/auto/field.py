@@ -24,6 +24,16 @@ from ..core.landmark_asymmetry import fit_mirror_plane
 from ..core.mesh_quantities import farthest_point_order
 from .config import AutoConfig
 
+# The registration stops when its images move less than this (RMS, x the diagonal) in an iteration: a
+# tenth of the precision the pairs need.
+CONVERGED = 1e-5
+# Ridge of a mirror field's least squares, x the normal matrix's mean diagonal: enough to keep the system
+# invertible where centres see no data, too little to pull a bend's large displacements back toward the plane.
+RIDGE = 1e-5
+# Rounds of Tukey reweighting when a field is fitted to a rough map's pairs: wrong pairs lose their weight
+# in two or three.
+ROBUST_ROUNDS = 4
+
 
 class MirrorField:
     """m(x) = reflect(x) + K(x) @ weights across the plane ``normal . x = offset`` (mesh units), the
@@ -107,8 +117,8 @@ def robust_fit(x: np.ndarray, y: np.ndarray, centres: np.ndarray, width: float, 
     plane = fit_mirror_plane(x, y)
     field = MirrorField(plane.normal, plane.offset, centres, width)
     weights = np.ones(len(x))
-    for _ in range(config.robust_rounds):
-        fit_to_pairs(field, x, y, weights, config.field_ridge)
+    for _ in range(ROBUST_ROUNDS):
+        fit_to_pairs(field, x, y, weights, RIDGE)
         weights = tukey_weights(np.linalg.norm(field(x) - y, axis=1), config, 1e-300)
     return field
 
@@ -117,7 +127,7 @@ def refitted(field: MirrorField, positions: np.ndarray, centres: np.ndarray, wid
              config: AutoConfig) -> MirrorField:
     """A field of another ``width`` and ``centres`` that reproduces ``field`` at ``positions`` (m, 3)."""
     finer = MirrorField(field.normal, field.offset, centres, width)
-    fit_to_pairs(finer, positions, field(positions), np.ones(len(positions)), config.field_ridge)
+    fit_to_pairs(finer, positions, field(positions), np.ones(len(positions)), RIDGE)
     return finer
 
 
@@ -133,7 +143,7 @@ def register(field: MirrorField, surface, sample: np.ndarray, iterations: int, c
     for _ in range(iterations):
         images = field(x)
         if previous is not None and np.sqrt(np.mean(np.sum((images - previous) ** 2, axis=1))) < \
-                config.field_converged * surface.diagonal:
+                CONVERGED * surface.diagonal:
             break
         previous = images
         landed, distance, landed_normals, _, _ = surface.nearest_points(images)
@@ -153,7 +163,7 @@ def register(field: MirrorField, surface, sample: np.ndarray, iterations: int, c
         image_kernel = field.kernel(images)
         matrix += config.involution_weight * _point_normal_matrix(image_kernel, weights)
         right += config.involution_weight * ((image_kernel * weights[:, None]).T @ (x - field.reflected(images))).reshape(-1)
-        field.weights = _ridge_solve(matrix, right, config.field_ridge).reshape(-1, 3)
+        field.weights = _ridge_solve(matrix, right, RIDGE).reshape(-1, 3)
     return field
 
 

@@ -39,7 +39,7 @@ from .connectivity import tessellation_mirror
 from .field import MirrorField, field_centres, refitted, register, robust_fit, robust_tolerance
 from .intrinsic_map import intrinsic_pairs
 from .maps import MirrorMap, affine_map, field_map, pairs_map, plane_map, point_pairs_map
-from .registration import coherent_point_drift, registration_sample
+from .registration import MIN_DEVIATION, POOL, SAMPLES, coherent_point_drift, registration_sample
 from .rivals import Rival, close_rivals
 from .surface import Outline, Surface
 from .twins import find_twins
@@ -74,7 +74,7 @@ def tessellation_map(surface: Surface, maps: list[MirrorMap], sources: np.ndarra
         partner = np.full(len(surface.points), -1)
         seeds, twin = one_pair_per_vertex(sources[exact], twins.vertex[exact])
         partner[seeds], partner[twin] = twin, seeds
-        mirrored = tessellation_mirror(surface.adjacency, partner, surface.usable, config)
+        mirrored = tessellation_mirror(surface.adjacency, partner, surface.usable)
         if mirrored is not None:
             return pairs_map(surface, mirrored, mirror.normal, config, "tessellation mirror")
     return None
@@ -89,13 +89,13 @@ def intrinsic_mirror_map(surface: Surface, normal: np.ndarray, config: AutoConfi
     return point_pairs_map(surface, *pairs, normal, config, "intrinsic mirror")
 
 
-def _drift_predictions(start: MirrorMap, x: np.ndarray, config: AutoConfig) -> np.ndarray:
+def _drift_predictions(start: MirrorMap, x: np.ndarray) -> np.ndarray:
     """Twin positions (m, 3) of ``x`` (m, 3) under ``start`` corrected by coherent point drift."""
     surface = start.surface
-    sample = registration_sample(surface, config.cpd_samples, config.cpd_pool)
+    sample = registration_sample(surface, SAMPLES, POOL)
     points, normals = surface.points[sample], surface.normals[sample]
     drift = coherent_point_drift(points, start.predict(points), normals, start.mirror_normals(normals, points),
-                                 config.cpd_min_deviation * surface.spacing, config)
+                                 MIN_DEVIATION * surface.spacing)
     return drift(start.predict(x))
 
 
@@ -105,11 +105,11 @@ def _starts(surface: Surface, sample: np.ndarray, ranked: list[MirrorMap], intri
     x = surface.points[sample]
     for mirror in ranked:
         yield mirror.name, sample, mirror.predict(x)
-    yield f"drift from the {ranked[0].name}", sample, _drift_predictions(ranked[0], x, config)
+    yield f"drift from the {ranked[0].name}", sample, _drift_predictions(ranked[0], x)
     if intrinsic is not None:
         yield intrinsic.name, sample, intrinsic.predict(x)
     for mirror in ranked[1:2]:
-        yield f"drift from the {mirror.name}", sample, _drift_predictions(mirror, x, config)
+        yield f"drift from the {mirror.name}", sample, _drift_predictions(mirror, x)
 
 
 def registered_field(surface: Surface, sample: np.ndarray, field: MirrorField, config: AutoConfig) -> MirrorField:

@@ -29,18 +29,28 @@ from ..core.mesh_graph import one_pair_per_vertex
 from .config import AutoConfig
 from .surface import Surface
 
+# Unpaired vertices this close to a pair (x the median vertex spacing) are tried in a wave of the growth:
+# the ring around the pairs and the next.
+FRONTIER = 3.0
+# Pull of each local affine mirror map toward its best improper rigid map, x the neighbourhood's spread:
+# keeps a map of a nearly flat patch determined without stiffening a curved one.
+LOCAL_MAP_RIDGE = 0.05
+# Prune-and-grow passes at most: each removes what the one before grew wrong, and none was needed beyond
+# the third.
+PASSES = 4
+
 def local_maps(points: np.ndarray, partner: np.ndarray, queries: np.ndarray, paired: np.ndarray,
                tree: cKDTree, config: AutoConfig, leave_out: bool = False):
     """Predicted twins (m, 3) of the positions ``queries`` (m, 3) and the improper rigid part (m, 3, 3) of
     their local maps: affine maps fitted to the ``config.local_neighbours`` nearest paired vertices ``paired``
     (``tree`` holds their positions ``points[paired]``, ``partner`` their twins), pulled toward the best
-    improper rigid map by ``config.growth_ridge`` (x the neighbourhood's spread); ``leave_out``: the queries
+    improper rigid map by ``LOCAL_MAP_RIDGE`` (x the neighbourhood's spread); ``leave_out``: the queries
     are the paired vertices' own positions, and each map is fitted without the query's own pair."""
     k = min(config.local_neighbours + int(leave_out), len(paired))
     _, nearest = tree.query(queries, k=k)
     neighbours = paired[nearest.reshape(len(queries), k)[:, int(leave_out):]]
     x, y = points[neighbours], points[partner[neighbours]]
-    return affine_mirror_maps(x, y, np.ones(x.shape[:2]), queries, config.growth_ridge)
+    return affine_mirror_maps(x, y, np.ones(x.shape[:2]), queries, LOCAL_MAP_RIDGE)
 
 
 def affine_mirror_maps(x: np.ndarray, y: np.ndarray, weights: np.ndarray, queries: np.ndarray, ridge: float):
@@ -81,7 +91,7 @@ def grow(surface: Surface, partner: np.ndarray, eligible: np.ndarray, twins: np.
             return waves
         tree = cKDTree(points[paired])
         unpaired = np.flatnonzero(eligible & (partner < 0))
-        gap, _ = tree.query(points[unpaired], distance_upper_bound=config.growth_frontier * surface.spacing)
+        gap, _ = tree.query(points[unpaired], distance_upper_bound=FRONTIER * surface.spacing)
         sources = unpaired[np.isfinite(gap)]
         if not len(sources):
             return waves
@@ -136,11 +146,11 @@ def grow_and_prune(space: Surface, geometry: Surface, partner: np.ndarray, eligi
     """:func:`prune` the seeds in ``partner`` on ``geometry`` (the input), :func:`grow` in ``space`` (where
     the map predicts: the input, or a symmetrized output; ``eligible`` (N,) bool vertices, with ``twins``
     (N,) bool ones), prune again, and grow again without what was dropped, until nothing changes (at most
-    ``config.growth_passes``). The least precision the prune asks is ``config.coincident`` x the diagonal."""
+    ``PASSES``). The least precision the prune asks is ``config.coincident`` x the diagonal."""
     floor = config.coincident * space.diagonal
     dropped = np.zeros(len(partner), dtype=bool)
     waves = 0
-    for _ in range(config.growth_passes):
+    for _ in range(PASSES):
         removed = prune(geometry, partner, fixed, config, floor)
         dropped |= removed
         grown = grow(space, partner, eligible & ~dropped, twins & ~dropped, config)

@@ -9,7 +9,7 @@ and its twin.
 ZoomOut's point map is right only up to a vertex or two where the shape is thin (on a cow's swung
 leg, half its vertex pairs are a vertex off). Those errors point every way, while the right pairs
 agree on one local map; so each pair's twin is replaced by where a robust local map of its
-``intrinsic_neighbours`` nearest other pairs puts it, an affine map fitted by iteratively reweighted
+``NEIGHBOURS`` nearest other pairs puts it, an affine map fitted by iteratively reweighted
 least squares (Tukey's biweight, cut at ``robust_sigmas`` robust deviations of the neighbours'
 residuals): on a mesh whose vertices mirror each other it lands within 1e-4 of the spacing of the
 exact twin where the mirror is locally rigid, on one sampled independently it averages the sampling
@@ -26,9 +26,17 @@ from scipy.spatial import cKDTree
 
 from .config import AutoConfig
 from .field import tukey_weights
-from .growth import affine_mirror_maps
+from .growth import LOCAL_MAP_RIDGE, affine_mirror_maps
 from .spectral import CandidateMirror, WorkingMesh, candidate_mirrors, working_mesh
 from .surface import Surface
+
+# Intrinsic vertex pairs each robust local map is fitted to: twice the 12 of a local affine map, since up to
+# half of them may be a vertex off (ZoomOut on a thin limb) and the reweighting needs the right ones to outnumber
+# any wrong ones that agree.
+NEIGHBOURS = 24
+# Rounds of Tukey reweighting of each robust local map: the pairs a vertex off lose their weight in a few;
+# on a cow's swung leg, where the mirror is rigid, the maps then land within 1e-4 of the spacing of the exact twins.
+ROUNDS = 8
 
 
 MINIMUM_PAIRS = 4  # the fewest pairs that determine an affine map of space
@@ -37,17 +45,17 @@ MINIMUM_PAIRS = 4  # the fewest pairs that determine an affine map of space
 def robust_twins(x: np.ndarray, y: np.ndarray, config: AutoConfig) -> np.ndarray:
     """Twin positions (m, 3) of ``x`` (m, 3) under robust local affine maps of the other pairs ``x`` -> ``y``
     (see the module doc)."""
-    k = min(config.intrinsic_neighbours, len(x) - 1)
+    k = min(NEIGHBOURS, len(x) - 1)
     _, nearest = cKDTree(x).query(x, k=k + 1)
     neighbours = nearest[:, 1:]
     weights = np.ones((len(x), k))
-    for _ in range(config.intrinsic_rounds):
-        predicted, _ = affine_mirror_maps(x[neighbours], y[neighbours], weights, x, config.growth_ridge)
+    for _ in range(ROUNDS):
+        predicted, _ = affine_mirror_maps(x[neighbours], y[neighbours], weights, x, LOCAL_MAP_RIDGE)
         residual = np.linalg.norm(predicted - y, axis=1)[neighbours]
         tukey = tukey_weights(residual, config, 1e-12 * np.ptp(x))  # per row: the neighbours' residuals
         enough = np.count_nonzero(tukey, axis=1) >= MINIMUM_PAIRS
         weights[enough] = tukey[enough]
-    return affine_mirror_maps(x[neighbours], y[neighbours], weights, x, config.growth_ridge)[0]
+    return affine_mirror_maps(x[neighbours], y[neighbours], weights, x, LOCAL_MAP_RIDGE)[0]
 
 
 def spectral_candidates(surface: Surface, config: AutoConfig) -> tuple[WorkingMesh | None,
@@ -79,7 +87,7 @@ def _denoised_pairs(surface: Surface, config: AutoConfig) -> tuple[np.ndarray, n
     twin = candidates[0].vertex_map  # the one that mirrors the most of the surface
     back = np.linalg.norm(mesh.points[twin[twin]] - mesh.points, axis=1)
     vertices = np.flatnonzero(back <= config.pair_consistency * surface.diagonal)
-    if len(vertices) <= config.intrinsic_neighbours:
+    if len(vertices) <= NEIGHBOURS:
         return None
     x, y = mesh.points[vertices], mesh.points[twin[vertices]]
     denoised = robust_twins(x, y, config)

@@ -144,7 +144,7 @@ def _exact_pairs(mirror: MirrorMap, sources: np.ndarray, twins, exact_twins: np.
                             forbidden, config)
     tessellation = None
     if surface.is_mesh:
-        mirrored = tessellation_mirror(surface.adjacency, partner, surface.usable & ~forbidden, config)
+        mirrored = tessellation_mirror(surface.adjacency, partner, surface.usable & ~forbidden)
         tessellation = mirrored is not None
         if mirrored is not None:
             # Where the tessellation stops mirroring (a midline strip triangulated one way), its pairs can be

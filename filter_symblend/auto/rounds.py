@@ -42,6 +42,12 @@ from .report import AutomaticPairsReport, Round
 from .rivals import rival_warning
 from .surface import Outline, Surface, build_surface
 
+# The rounds stop when the output moves less than this (x the diagonal): numerically the same output.
+CONVERGED_CHANGE = 1e-9
+# Times theta_width may double where the automatic pairs' neighbourhoods are flat (a straight outline),
+# which the user did not place and cannot move.
+WIDENINGS = 4
+
 
 def _solve_widening(points: np.ndarray, landmarks: LandmarkPairs, options: dict, progress,
                     widenings: int) -> tuple[SymmetrizationResult, dict]:
@@ -196,7 +202,7 @@ def _surface(points: np.ndarray, faces: np.ndarray, landmarks: LandmarkPairs | N
         forbidden[excluded] = True
     if landmarks is not None:
         forbidden[np.concatenate([landmarks.left, landmarks.right, landmarks.midline])] = True
-    surface = build_surface(points, faces, excluded=np.flatnonzero(forbidden), config=config)
+    surface = build_surface(points, faces, excluded=np.flatnonzero(forbidden))
     if len(surface.usable_index) < 4:
         if isinstance(surface, Outline):
             raise GeometryError(f"The mesh is flat (every vertex in one plane), so its outline is what is paired, and "
@@ -271,7 +277,7 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
         exact_twins = pairs.search.twins_are == "exact vertices"
         solved, checked = as_landmarks(points, pairs, landmarks, options["landmark_priority"], config.coincident)
         candidate, solve_options = _solve_widening(solved, checked, core, scaled_progress(progress, start, step),
-                                                   config.widenings)
+                                                   WIDENINGS)
         candidate = dataclasses.replace(candidate, points=candidate.points[:n], asymmetry=candidate.asymmetry[:n])
         entry = Round(surface_asymmetry(surface, candidate, scored), search=pairs.search,
                       pairs=int(len(checked.left) - given[0]), midline=int(len(checked.midline) - given[1]),
@@ -294,7 +300,7 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
         history.append(entry)
         gain = 1.0 - entry.surface_asymmetry / best if np.isfinite(best) and best > 0 else 1.0
         result, best, source = candidate, entry.surface_asymmetry, mirror
-        if entry.change < config.converged_change:
+        if entry.change < CONVERGED_CHANGE:
             stopped = "converged"
             break
         if entry.search.share_paired >= config.plane_suffices:  # exact pairs: the share paired

@@ -40,6 +40,13 @@ from ..core.mesh_graph import vertex_adjacency
 from ..core.parallel import in_threads
 from .config import AutoConfig
 
+# Heat kernel signatures, at times spread over the spectrum, that the mirror must keep and that enter its
+# orientation term: each is a different even function of the shape.
+DESCRIPTOR_SCALES = 8
+# Weight of the functional map's commutation with the Laplacian, relative to the descriptor and orientation
+# terms (each scaled to the descriptors' size): equal footing.
+COMMUTATIVITY_WEIGHT = 1.0
+
 POINT_MAP_ROWS = 512  # rows of point_map's distance block: 512 x n float32, 10 MB at n = 5,000
 MINIMUM_TRIANGLES = 48  # a working mesh with fewer cannot carry a dozen eigenfunctions (four triangles each)
 # First functional map sizes (eigenfunctions) tried: the sign solve is sensitive to the size where the pose is
@@ -183,12 +190,11 @@ def closest_symmetric_orthogonal(matrix: np.ndarray) -> np.ndarray:
     return (vectors * np.where(values >= 0, 1.0, -1.0)) @ vectors.T
 
 
-def mirror_functional_map(points: np.ndarray, faces: np.ndarray, basis: Eigenbasis, count: int,
-                          config: AutoConfig) -> np.ndarray:
+def mirror_functional_map(points: np.ndarray, faces: np.ndarray, basis: Eigenbasis, count: int) -> np.ndarray:
     """The (count, count) functional map of the orientation-reversing intrinsic symmetry on the first
     ``count`` eigenfunctions (see the module doc), projected onto the involutions."""
     functions = basis.functions[:, :count]
-    descriptors = heat_kernel_signatures(basis, config.descriptor_scales)
+    descriptors = heat_kernel_signatures(basis, DESCRIPTOR_SCALES)
     coefficients = functions.T @ (basis.mass[:, None] * descriptors)  # (count, d), preserved by the mirror
     operators = orientation_operators(points, faces, functions, descriptors)
     identity = np.eye(count)
@@ -202,7 +208,7 @@ def mirror_functional_map(points: np.ndarray, faces: np.ndarray, basis: Eigenbas
         right.append(np.zeros(count * count))
     values = basis.values[:count] / basis.values[count - 1]
     gaps = (values[:, None] - values[None, :]) ** 2
-    rows.append(config.commutativity_weight * scale * np.diag(gaps.reshape(-1, order="F")))
+    rows.append(COMMUTATIVITY_WEIGHT * scale * np.diag(gaps.reshape(-1, order="F")))
     right.append(np.zeros(count * count))
     solution = np.linalg.lstsq(np.vstack(rows), np.concatenate(right), rcond=None)[0]
     return closest_symmetric_orthogonal(solution.reshape(count, count, order="F"))
@@ -294,7 +300,7 @@ def candidate_mirrors(mesh: WorkingMesh, config: AutoConfig) -> list[CandidateMi
     basis = eigenbasis(mesh.points, mesh.faces, max(size for size, _ in config.zoomout_sizes))
     if basis is None:
         return None
-    signatures = heat_kernel_signatures(basis, config.descriptor_scales)
+    signatures = heat_kernel_signatures(basis, DESCRIPTOR_SCALES)
     steps = {min(size, len(basis.values)): step for size, step in config.zoomout_sizes}
     sizes = {size: Eigenbasis(basis.values[:size], basis.functions[:, :size], basis.mass) for size in steps}
     tasks = [(start, size, step) for size, step in steps.items() for start in STARTS if start + 2 <= size]
@@ -302,7 +308,7 @@ def candidate_mirrors(mesh: WorkingMesh, config: AutoConfig) -> list[CandidateMi
     def candidate(task: tuple[int, int, int]) -> CandidateMirror:
         start, size, step = task
         truncated = sizes[size]
-        functional = mirror_functional_map(mesh.points, mesh.faces, truncated, start, config)
+        functional = mirror_functional_map(mesh.points, mesh.faces, truncated, start)
         vertex_map = zoomout(truncated, point_map(truncated.functions[:, :start], functional), start, size, step)
         return CandidateMirror(start, size, vertex_map, descriptor_disagreement(signatures, vertex_map),
                                reversed_share(mesh.points, mesh.faces,

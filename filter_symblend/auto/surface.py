@@ -24,7 +24,9 @@ from ..core.mesh_graph import vertex_adjacency
 from ..core.mesh_quantities import vertex_normals
 from ..core.mirror_fill import TriangleSurface
 from ..core.surface_points import barycentric, vertex_points
-from .config import DEFAULT, AutoConfig
+
+# Neighbours whose mean distance is a point cloud's local spacing.
+POINT_CLOUD_NEIGHBOURS = 8
 
 
 class Surface:
@@ -35,9 +37,8 @@ class Surface:
     """
 
     def __init__(self, points: np.ndarray, faces: np.ndarray, excluded: np.ndarray | None = None,
-                 usable: np.ndarray | None = None, neighbours: int = DEFAULT.point_cloud_neighbours):
+                 usable: np.ndarray | None = None):
         self.points = np.asarray(points, dtype=float)
-        self.neighbours = neighbours
         faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
         if usable is None:
             _, first, inverse = np.unique(self.points, axis=0, return_index=True, return_inverse=True)
@@ -66,7 +67,7 @@ class Surface:
     def moved(self, points: np.ndarray) -> "Surface":
         """The same surface (welded triangles, usable vertices) at the positions ``points`` (N, 3), as a
         symmetrized output is: its triangles and local vertex spacing are taken as the input's."""
-        moved = Surface(points, self.faces, usable=self.usable, neighbours=self.neighbours)
+        moved = Surface(points, self.faces, usable=self.usable)
         moved.representative = self.representative
         moved.__dict__.update(triangles=self.triangles, local_spacing=self.local_spacing, spacing=self.spacing)
         return moved
@@ -101,7 +102,7 @@ class Surface:
         """(N,) distance from each usable vertex to its nearest usable neighbour (inf elsewhere)."""
         spacing = np.full(len(self.points), np.inf)
         if len(self.usable_index) > 1:
-            k = 2 if self.is_mesh else min(len(self.usable_index), self.neighbours + 1)
+            k = 2 if self.is_mesh else min(len(self.usable_index), POINT_CLOUD_NEIGHBOURS + 1)
             distance, _ = self.vertex_tree.query(self.points[self.usable_index], k=k)
             spacing[self.usable_index] = distance[:, 1] if self.is_mesh else distance[:, 1:].mean(axis=1)
         return spacing
@@ -247,9 +248,8 @@ def _boundary_edges(faces: np.ndarray, points: np.ndarray, normal: np.ndarray) -
     return directed[counts[inverse.ravel()] == 1]
 
 
-def build_surface(points: np.ndarray, faces: np.ndarray, excluded: np.ndarray | None = None,
-                  config: AutoConfig = DEFAULT) -> Surface:
+def build_surface(points: np.ndarray, faces: np.ndarray, excluded: np.ndarray | None = None) -> Surface:
     """The :class:`Surface` of a mesh, or its :class:`Outline` if the mesh is flat."""
-    surface = Surface(points, faces, excluded, neighbours=config.point_cloud_neighbours)
+    surface = Surface(points, faces, excluded)
     normal = flat_normal(points[surface.usable_index]) if surface.is_mesh and len(surface.usable_index) > 2 else None
     return surface if normal is None else Outline(points, faces, normal, excluded)
