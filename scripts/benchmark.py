@@ -18,7 +18,7 @@ Seconds are the filter's own stage timings (median of --repeat runs).
                                              # samples, as given and deformed; synthetic meshes as they come
     python scripts/benchmark.py --filter     # what the user runs: the MeshSet filter against its core, and
                                              # `symblend report`, each in its own process (time, peak RSS)
-    python scripts/benchmark.py --mirror-maps [--quick | --all-shapes] [--bcicp PATH] [--no-pyfm]
+    python scripts/benchmark.py --mirror-maps [--quick | --half H | --all-shapes] [--bcicp PATH] [--no-pyfm]
                                              # the automatic pairs' mirror map against the ground-truth
                                              # self-symmetry of FAUST and TOSCA (BCICP dataset), pyFM beside it
     python scripts/benchmark.py --batch      # `symblend batch` on 16 specimens of about 30k vertices: 1 and 2
@@ -63,6 +63,8 @@ def main(argv=None) -> None:
     parser.add_argument("--quick", action="store_true",
                         help="--mirror-maps: six shapes (about 2 minutes); --uncertainty: 6 sets a cell, not 12 (4 draws, not 10)")
     parser.add_argument("--all-shapes", action="store_true", help="--mirror-maps: every FAUST and TOSCA shape")
+    parser.add_argument("--half", choices=["both", "chosen", "checked"], default="both",
+                        help="--mirror-maps: the shapes the choices were made on, those kept to check them, or both")
     parser.add_argument("--shapes", nargs="+", help="--mirror-maps: these shapes only (e.g. tr_reg_088 cat4)")
     parser.add_argument("--bcicp", help="--mirror-maps: the dataset (a git snapshot or an unpacked copy)")
     parser.add_argument("--no-pyfm", action="store_true", help="--mirror-maps: leave out the pyFM baseline")
