@@ -39,6 +39,7 @@ LOCAL_MAP_RIDGE = 0.05
 # the third.
 PASSES = 4
 
+
 def local_maps(points: np.ndarray, partner: np.ndarray, queries: np.ndarray, paired: np.ndarray,
                tree: cKDTree, config: AutoConfig, leave_out: bool = False):
     """Predicted twins (m, 3) of the positions ``queries`` (m, 3) and the improper rigid part (m, 3, 3) of

@@ -37,8 +37,6 @@ NEIGHBOURS = 24
 # Rounds of Tukey reweighting of each robust local map: the pairs a vertex off lose their weight in a few;
 # on a cow's swung leg, where the mirror is rigid, the maps then land within 1e-4 of the spacing of the exact twins.
 ROUNDS = 8
-
-
 MINIMUM_PAIRS = 4  # the fewest pairs that determine an affine map of space
 
 
