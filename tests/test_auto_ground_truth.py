@@ -34,7 +34,7 @@ DEFORMATIONS = {
 def test_a_remeshed_deformed_cow_comes_back_more_symmetric_than_100_landmarks_make_it(remeshed_cow, deformation):
     """No vertex of the remeshed cow has an exact twin: the pairs are vertices and points of the surface.
     The issue's target is a fifth of the landmarks' error; what is asserted is what the layer reaches on
-    every such case measured (docs/automatic-pairs.md has the table)."""
+    every such case measured (docs/benchmarks.md has the table)."""
     truth = remeshed_cow
     deformed = synthetic.random_rigid(DEFORMATIONS[deformation](truth.points), seed=7)
     automatic = symmetrize(deformed, faces=truth.faces, pairs="auto", mode="affine")
