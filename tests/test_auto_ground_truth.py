@@ -158,6 +158,25 @@ def test_the_intrinsic_mirrors_pairs_a_vertex_off_are_put_back_on_the_exact_twin
     assert np.quantile(error, 0.99) < 1e-9 * spacing
 
 
+def test_the_local_maps_shared_by_vertices_with_the_same_nearest_pairs_are_each_vertexs_own_fit():
+    """A dense mesh between sparse pairs (here 1 vertex in 10, bent): each vertex's local map is fitted once per set
+    of nearest pairs; it must be the map fitted to that vertex's own pairs, in their own order."""
+    from scipy.spatial import cKDTree
+    from filter_symblend.auto.growth import LOCAL_MAP_RIDGE, affine_mirror_maps, local_maps
+    points, _ = symmetric_blob(4)
+    bent = synthetic.bend(points, 0.6)
+    partner = twins(points)
+    paired = np.arange(0, len(points), 10)
+    tree = cKDTree(bent[paired])
+    predicted, rigid = local_maps(bent, partner, bent, paired, tree, AutoConfig())
+    k = AutoConfig().local_neighbours
+    own = paired[tree.query(bent, k=k)[1]]
+    expected, expected_rigid = affine_mirror_maps(bent[own], bent[partner[own]], np.ones(own.shape), bent, LOCAL_MAP_RIDGE)
+    assert len(np.unique(np.sort(own, axis=1), axis=0)) < 0.8 * len(points)  # fits are shared
+    np.testing.assert_allclose(predicted, expected, atol=1e-12 * np.ptp(points))
+    np.testing.assert_allclose(rigid, expected_rigid, atol=1e-12)
+
+
 def test_the_parts_of_a_body_of_revolution_decide_its_mirror_plane():
     """Every plane through the axis mirrors the body; only y = 0 mirrors the knob and the ridge too."""
     points, faces = synthetic.body_with_two_parts()
