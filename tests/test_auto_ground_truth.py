@@ -171,7 +171,8 @@ def test_the_local_maps_shared_by_vertices_with_the_same_nearest_pairs_are_each_
     predicted, rigid = local_maps(bent, partner, bent, paired, tree, AutoConfig())
     k = AutoConfig().local_neighbours
     own = paired[tree.query(bent, k=k)[1]]
-    expected, expected_rigid = affine_mirror_maps(bent[own], bent[partner[own]], np.ones(own.shape), bent, LOCAL_MAP_RIDGE)
+    expected, expected_rigid = affine_mirror_maps(bent[own], bent[partner[own]], np.ones(own.shape), bent,
+                                                  LOCAL_MAP_RIDGE)
     assert len(np.unique(np.sort(own, axis=1), axis=0)) < 0.8 * len(points)  # fits are shared
     np.testing.assert_allclose(predicted, expected, atol=1e-12 * np.ptp(points))
     np.testing.assert_allclose(rigid, expected_rigid, atol=1e-12)
