@@ -3,7 +3,7 @@
 For each source vertex the map predicts where its twin lies. The twin is the point of
 the surface nearest that prediction (how far the prediction is from the surface is its
 *landing* distance), and, if the nearest vertex is unambiguous (ratio test) and the map
-sends that vertex back to the source (mutual), that vertex. A twin counts only if the
+sends that vertex back to the source (mutual), that vertex. A twin is sound only if the
 map is consistent there: the twin point's own prediction comes back within the local
 vertex spacing of the source, and the two face the mirrored way (on a thin sheet the
 other face is near, but faces away).
@@ -26,8 +26,9 @@ class Twins:
     barycentric weights of the twin point (the same point on any embedding of the mesh);
     ``vertex`` (m,) the nearest vertex to the prediction, ``vertex_distance``, ``ratio`` (nearest /
     second-nearest), ``spacing`` the local vertex spacing there, ``mutual`` whether the map sends that vertex
-    back to the source; ``returned`` (m, 3) where the map sends the twin point (the round trip); ``sound`` whether
-    the map is consistent there; ``side`` +1 for a source on the left (along the map's normal), -1 right."""
+    back to the source; ``returned`` (m, 3) where the map sends the twin point (the round trip); ``facing``
+    whether the prediction is finite and the twin faces the mirrored way; ``sound`` whether the map is also
+    consistent there (its round trip); ``side`` +1 for a source on the left (along the map's normal), -1 right."""
 
     sources: np.ndarray
     point: np.ndarray
@@ -40,6 +41,7 @@ class Twins:
     spacing: np.ndarray
     mutual: np.ndarray
     returned: np.ndarray
+    facing: np.ndarray
     sound: np.ndarray
     side: np.ndarray
 
@@ -68,11 +70,12 @@ def find_twins(mirror: MirrorMap, sources: np.ndarray, tolerance: float) -> Twin
     returned = mirror.predict(point)
     back, _, _ = surface.nearest_vertices(returned)  # (a vertex: the round trip's own error is small)
     round_trip = np.linalg.norm(surface.points[back] - positions, axis=1)
-    sound = np.isfinite(predicted).all(axis=1) & (round_trip <= np.maximum(surface.local_spacing[sources], tolerance))
+    facing = np.isfinite(predicted).all(axis=1)
     if surface.is_mesh:
-        sound &= np.einsum("ni,ni->n", mirror.mirror_normals(surface.normals[sources], positions), twin_normal) > 0
+        facing &= np.einsum("ni,ni->n", mirror.mirror_normals(surface.normals[sources], positions), twin_normal) > 0
+    sound = facing & (round_trip <= np.maximum(surface.local_spacing[sources], tolerance))
     vertex, vertex_distance, ratio = surface.nearest_vertices(predicted)
     returning, _, _ = surface.nearest_vertices(mirror.predict(surface.points[vertex]))
     side = np.where((positions - point) @ mirror.normal >= 0, 1, -1).astype(np.int8)
     return Twins(sources, point, landing, corners, weights, vertex, vertex_distance, ratio, surface.local_spacing[vertex],
-                 returning == sources, returned, sound, side)
+                 returning == sources, returned, facing, sound, side)
