@@ -77,5 +77,5 @@ def find_twins(mirror: MirrorMap, sources: np.ndarray, tolerance: float) -> Twin
     vertex, vertex_distance, ratio = surface.nearest_vertices(predicted)
     returning, _, _ = surface.nearest_vertices(mirror.predict(surface.points[vertex]))
     side = np.where((positions - point) @ mirror.normal >= 0, 1, -1).astype(np.int8)
-    return Twins(sources, point, landing, corners, weights, vertex, vertex_distance, ratio, surface.local_spacing[vertex],
-                 returning == sources, returned, facing, sound, side)
+    return Twins(sources, point, landing, corners, weights, vertex, vertex_distance, ratio,
+                 surface.local_spacing[vertex], returning == sources, returned, facing, sound, side)
