@@ -38,10 +38,18 @@ class MirrorMap:
     normal: np.ndarray
     carry: Callable[[np.ndarray, np.ndarray], np.ndarray]
     plane: MirrorPlane | None = None
+    both: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
 
     def mirror_normals(self, normals: np.ndarray, positions: np.ndarray) -> np.ndarray:
         """Unit normals (m, 3) at the twins of ``positions`` (m, 3), about, of the ``normals`` (m, 3) there."""
         return self.carry(normals, positions)
+
+    def twins_and_normals(self, positions: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``predict(positions)`` and ``mirror_normals(normals, positions)``, from one evaluation where the map
+        has one for both (``both``: the local maps between pairs, the costliest to evaluate)."""
+        if self.both is not None:
+            return self.both(positions, normals)
+        return self.predict(positions), self.carry(normals, positions)
 
 
 def _linear_carry(linear: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
@@ -100,9 +108,13 @@ def point_pairs_map(surface: Surface, x: np.ndarray, y: np.ndarray, normal: np.n
     def predict(queries: np.ndarray) -> np.ndarray:
         return local_maps(positions, partner, queries, paired, tree, config)[0]
 
+    def both(queries: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        predicted, rigid = local_maps(positions, partner, queries, paired, tree, config)
+        # an improper rotation is its own inverse transpose
+        return predicted, normalize(np.einsum("nij,nj->ni", rigid, normals))
+
     def carry(normals: np.ndarray, queries: np.ndarray) -> np.ndarray:
-        rigid = local_maps(positions, partner, queries, paired, tree, config)[1]
-        return normalize(np.einsum("nij,nj->ni", rigid, normals))  # an improper rotation is its inverse transpose
+        return both(queries, normals)[1]
 
     normal = normalize(np.asarray(normal, dtype=float))
-    return MirrorMap(name, surface, predict, normal, carry)
+    return MirrorMap(name, surface, predict, normal, carry, both=both)

@@ -65,14 +65,17 @@ def find_twins(mirror: MirrorMap, sources: np.ndarray, tolerance: float) -> Twin
     (on a fine scan the map's own inconsistency is the scan's asymmetry, not the vertex spacing)."""
     surface = mirror.surface
     positions = surface.points[sources]
-    predicted = mirror.predict(positions)
+    if surface.is_mesh:
+        predicted, carried = mirror.twins_and_normals(positions, surface.normals[sources])
+    else:
+        predicted = mirror.predict(positions)
     point, landing, twin_normal, corners, weights = surface.nearest_points(predicted)
     returned = mirror.predict(point)
     back, _, _ = surface.nearest_vertices(returned)  # (a vertex: the round trip's own error is small)
     round_trip = np.linalg.norm(surface.points[back] - positions, axis=1)
     facing = np.isfinite(predicted).all(axis=1)
     if surface.is_mesh:
-        facing &= np.einsum("ni,ni->n", mirror.mirror_normals(surface.normals[sources], positions), twin_normal) > 0
+        facing &= np.einsum("ni,ni->n", carried, twin_normal) > 0
     sound = facing & (round_trip <= np.maximum(surface.local_spacing[sources], tolerance))
     vertex, vertex_distance, ratio = surface.nearest_vertices(predicted)
     returning, _, _ = surface.nearest_vertices(mirror.predict(surface.points[vertex]))
