@@ -190,11 +190,12 @@ def closest_symmetric_orthogonal(matrix: np.ndarray) -> np.ndarray:
     return (vectors * np.where(values >= 0, 1.0, -1.0)) @ vectors.T
 
 
-def mirror_functional_map(points: np.ndarray, faces: np.ndarray, basis: Eigenbasis, count: int) -> np.ndarray:
+def mirror_functional_map(points: np.ndarray, faces: np.ndarray, basis: Eigenbasis, count: int,
+                          descriptors: np.ndarray) -> np.ndarray:
     """The (count, count) functional map of the orientation-reversing intrinsic symmetry on the first
-    ``count`` eigenfunctions (see the module doc), projected onto the involutions."""
+    ``count`` eigenfunctions (see the module doc), projected onto the involutions; ``descriptors`` (n, d): the
+    heat kernel signatures of ``basis`` (:func:`heat_kernel_signatures`, DESCRIPTOR_SCALES of them)."""
     functions = basis.functions[:, :count]
-    descriptors = heat_kernel_signatures(basis, DESCRIPTOR_SCALES)
     coefficients = functions.T @ (basis.mass[:, None] * descriptors)  # (count, d), preserved by the mirror
     operators = orientation_operators(points, faces, functions, descriptors)
     identity = np.eye(count)
@@ -303,12 +304,13 @@ def candidate_mirrors(mesh: WorkingMesh, config: AutoConfig) -> list[CandidateMi
     signatures = heat_kernel_signatures(basis, DESCRIPTOR_SCALES)
     steps = {min(size, len(basis.values)): step for size, step in config.zoomout_sizes}
     sizes = {size: Eigenbasis(basis.values[:size], basis.functions[:, :size], basis.mass) for size in steps}
+    descriptors = {size: heat_kernel_signatures(truncated, DESCRIPTOR_SCALES) for size, truncated in sizes.items()}
     tasks = [(start, size, step) for size, step in steps.items() for start in STARTS if start + 2 <= size]
 
     def candidate(task: tuple[int, int, int]) -> CandidateMirror:
         start, size, step = task
         truncated = sizes[size]
-        functional = mirror_functional_map(mesh.points, mesh.faces, truncated, start)
+        functional = mirror_functional_map(mesh.points, mesh.faces, truncated, start, descriptors[size])
         vertex_map = zoomout(truncated, point_map(truncated.functions[:, :start], functional), start, size, step)
         return CandidateMirror(start, size, vertex_map, descriptor_disagreement(signatures, vertex_map),
                                reversed_share(mesh.points, mesh.faces,

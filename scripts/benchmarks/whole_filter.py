@@ -71,7 +71,7 @@ def filter_row(mesh: str, pairs: int, checks: str) -> None:
 
 # A `symblend` command as the console script runs it, then the process's own peak RSS (MB) on the last line.
 SYMBLEND_PROCESS = ("import resource, sys; from filter_symblend.commands.main import main; code = main(sys.argv[1:]); "
-                  "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024); sys.exit(code)")
+                    "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024); sys.exit(code)")
 
 
 def filter_main() -> None:
@@ -128,12 +128,11 @@ def auto_rows(made: dict, folder: str) -> None:
     print("| mesh | vertices | s | peak RSS MB | the map |")
     print("|---|---|---|---|---|")
     for name, faces in AUTO_ROWS:
-        file = pathlib.Path(folder) / f"{name.replace(' ', '_')}.ply"
-        path = str(IGEA) if faces == 0 else made.get(name) or str(file)
+        written = str(pathlib.Path(folder) / f"{name.replace(' ', '_')}.ply")
+        path = str(IGEA) if faces == 0 else made.get(name) or written
         if not pathlib.Path(path).exists():
             _filter_mesh(pathlib.Path(path), faces)
-        output = str(pathlib.Path(folder) / f"{name.replace(' ', '_')}_auto.ply")
-        report = output.replace(".ply", ".json")
+        output, report = written.replace(".ply", "_auto.ply"), written.replace(".ply", "_auto.json")
         out, seconds = child([sys.executable, "-c", SYMBLEND_PROCESS, "symmetrize", path, "--pairs", "auto",
                               "-o", output, "--report", report])
         rss = float(out.strip().splitlines()[-1])
