@@ -214,6 +214,36 @@ def test_mirror_asymmetry_on_a_sample_estimates_all_vertices(cow):
     assert sample["rms"] == pytest.approx(every["rms"], rel=0.1) and sample["max"] <= every["max"]
 
 
+def test_vertices_no_face_uses_are_not_measured_as_surface():
+    """pymeshlab's bone.ply has 359 vertices no face uses, off its surface: the Hausdorff distance of the
+    mesh to itself is 0 (it measured 8.9 % of the diagonal when they were sampled), and its mirror
+    asymmetry is that of the mesh without them."""
+    from filter_symblend.measures.hausdorff import two_way_distance
+    from filter_symblend.measures.surface_asymmetry import before_and_after, mirror_asymmetry
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(SAMPLE_MESHES / "bone.ply"))
+    points, faces = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+    ms.meshing_remove_unreferenced_vertices()
+    clean, clean_faces = ms.current_mesh().vertex_matrix(), ms.current_mesh().face_matrix()
+    assert len(points) - len(clean) == 359
+    hausdorff = two_way_distance(points, faces, points, faces, samples=len(points))
+    assert hausdorff["max"] == 0.0 and hausdorff["samples"] == len(clean)
+    plane = (np.array([1.0, 0.0, 0.0]), float(np.median(clean[:, 0])))
+    for samples in (None, 1000):
+        stray, without = (mirror_asymmetry(p, f, plane=plane, samples=samples) for p, f in
+                          ((points, faces), (clean, clean_faces)))
+        assert stray["measured_vertices"] == without["measured_vertices"]
+        assert stray["max"] == pytest.approx(without["max"], rel=1e-12)
+        assert stray["rms"] == pytest.approx(without["rms"], rel=1e-12)
+    assert len(mirror_asymmetry(points, faces, plane=plane)["per_vertex"]) == len(points)  # one per vertex
+    moved = points + 0.01 * np.sin(points[:, [1, 2, 0]])  # the stray vertices ride along
+    figures = before_and_after((points, faces), (moved, faces)), \
+        before_and_after((clean, clean_faces), (clean + 0.01 * np.sin(clean[:, [1, 2, 0]]), clean_faces))
+    for side in range(2):
+        assert figures[0][side]["plane_normal"] == pytest.approx(figures[1][side]["plane_normal"], abs=1e-9)
+        assert figures[0][side]["p90"] == pytest.approx(figures[1][side]["p90"], rel=1e-9)
+
+
 @pytest.mark.parametrize("checks, measured", [("none", set()),
                                               ("mirror", {"input_planes", "mirror_asymmetry_before", "mirror_asymmetry_after"}),
                                               ("full", {"input_planes", "mirror_asymmetry_before", "mirror_asymmetry_after",

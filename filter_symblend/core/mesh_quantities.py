@@ -1,5 +1,5 @@
-"""Quantities of a mesh (or point cloud) on arrays: vertex normals, mean edge length,
-farthest-point sampling."""
+"""Quantities of a mesh (or point cloud) on arrays: vertex normals, mean edge length, the vertices on its
+surface, farthest-point sampling."""
 
 from __future__ import annotations
 
@@ -70,3 +70,21 @@ def farthest_point_order(points: np.ndarray, count: int, start: int | None = Non
 def evenly(points: np.ndarray, count: int) -> np.ndarray:
     """At most ``count`` rows of ``points`` (N, 3), evenly strided."""
     return points if len(points) <= count else points[np.linspace(0, len(points) - 1, count).astype(np.int64)]
+
+
+def on_surface(faces: np.ndarray, count: int) -> np.ndarray:
+    """Whether each of ``count`` vertices is a corner of one of ``faces`` (F, 3): (count,) bool; every vertex
+    of a point cloud (no faces). A vertex no face uses (left by a cleanup, a loader's stray point) is not on
+    the surface: measured, it would count its distance to the surface as the surface's."""
+    if not len(faces):
+        return np.ones(count, dtype=bool)
+    used = np.zeros(count, dtype=bool)
+    used[faces.ravel()] = True
+    return used
+
+
+def surface_vertices(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """The rows of ``points`` (N, 3) on the surface ``faces`` (F, 3) makes (:func:`on_surface`), in order:
+    ``points`` itself when every vertex is."""
+    used = on_surface(faces, len(points))
+    return points if used.all() else points[used]

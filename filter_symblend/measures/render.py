@@ -71,7 +71,7 @@ def render_comparison(path, before: dict, after: dict, titles=("before", "after"
     except ImportError:
         raise SymblendError("--png needs matplotlib, which is not installed: "
                             "pip install 'filter-symblend[plot]' (or pip install matplotlib).") from None
-    top = max(float(before["per_vertex"].max()), float(after["per_vertex"].max()), 1e-12)
+    top = max(before["max"], after["max"], 1e-12)  # the surfaces' (per_vertex holds stray vertices too)
     norm = matplotlib.colors.Normalize(0.0, top)
     colormap = matplotlib.colormaps["viridis"]
     rows = 2 if uncertainty is None else 3

@@ -2,7 +2,8 @@
 of the pairs a run solved refined to the surface, or without pairs the surface's best (core/mirror_planes).
 The asymmetry of a vertex is its distance to the reflected surface; by the reflection's symmetry the two
 directions of the Hausdorff distance are equal, so one direction, sampled at the vertices, is the two-way
-value.
+value. Planes and figures come from the vertices on the surface (core/mesh_quantities.on_surface): a vertex no
+face uses is not part of it.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import numpy as np
 
 from ..core.geometry import MirrorPlane, bounding_diagonal, reflection_across_plane
 from ..core.landmark_asymmetry import MirrorFit, fit_mirror_plane
-from ..core.mesh_quantities import evenly
+from ..core.mesh_quantities import evenly, on_surface, surface_vertices
 from ..core.mirror_fill import distance_to
 from ..core.mirror_planes import (DISTINCT, SCREEN_SAMPLES, best_plane_from, fit_surface_mirror_plane,
                                   surface_mirror_planes)
@@ -64,20 +65,22 @@ def before_and_after(before: tuple[np.ndarray, np.ndarray], after: tuple[np.ndar
     reaches from them (:func:`best_plane_from`). The filter's checks, ``symblend symmetrize`` and
     ``symblend report`` all measure this way, so the same two surfaces and pairs give the same figures;
     both relative to ``before``'s bounding-box diagonal."""
-    starts = input_planes(before[0], solved[0])
+    starts = input_planes(*before, solved[0])
     diagonal = bounding_diagonal(before[0])
     return (input_asymmetry(*before, starts, diagonal, samples, solved[0]),
             output_asymmetry(*after, starts, diagonal, samples, solved[1]))
 
 
-def input_planes(points: np.ndarray, solved: MirrorPlane | None = None) -> list[MirrorPlane]:
-    """The input's distinct mirror planes as the before/after checks find them (:func:`surface_mirror_planes`,
-    each ICP stopped at CHECK_CONVERGED): without the ``solved`` pairs' plane, from the principal and the
-    screened starts, best first; with it, from the principal starts and it, unpolished (they only name the
-    other planes: the screening finds a plane where no pairs say which, and costs most of the checks)."""
+def input_planes(points: np.ndarray, faces: np.ndarray, solved: MirrorPlane | None = None) -> list[MirrorPlane]:
+    """The distinct mirror planes of the input ``(points (N, 3), faces (F, 3))`` as the before/after checks
+    find them (:func:`surface_mirror_planes` of its surface's vertices, each ICP stopped at CHECK_CONVERGED):
+    without the ``solved`` pairs' plane, from the principal and the screened starts, best first; with it, from
+    the principal starts and it, unpolished (they only name the other planes: the screening finds a plane
+    where no pairs say which, and costs most of the checks)."""
+    surface = surface_vertices(points, faces)
     if solved is None:
-        return surface_mirror_planes(points, converged=CHECK_CONVERGED)
-    return surface_mirror_planes(points, solved, converged=CHECK_CONVERGED, polish=False)
+        return surface_mirror_planes(surface, converged=CHECK_CONVERGED)
+    return surface_mirror_planes(surface, solved, converged=CHECK_CONVERGED, polish=False)
 
 
 def input_asymmetry(points: np.ndarray, faces: np.ndarray, starts: list[MirrorPlane], diagonal: float,
@@ -86,7 +89,7 @@ def input_asymmetry(points: np.ndarray, faces: np.ndarray, starts: list[MirrorPl
     without it the best of its own ``starts`` (:func:`surface_mirror_planes` of ``points``), relative to
     ``diagonal``; ``plane_from`` says which (SOLVED or BEST); ``other_planes``: those of the ``starts``
     that mirror the input nearly as well (:func:`nearly_as_good`)."""
-    plane = starts[0] if solved is None else best_plane_from(points, [solved], CHECK_CONVERGED)
+    plane = starts[0] if solved is None else best_plane_from(surface_vertices(points, faces), [solved], CHECK_CONVERGED)
     to_surface = distance_to(points, faces)  # one search tree for every plane measured
     measured = mirror_asymmetry(points, faces, plane=plane, samples=samples, diagonal=diagonal, to_surface=to_surface)
     return {**measured, "plane_from": BEST if solved is None else SOLVED,
@@ -102,7 +105,7 @@ def nearly_as_good(points: np.ndarray, faces: np.ndarray, measured: MirrorPlane,
     one measured need not be the only symmetry; a strongly bent shape, mirrored about as badly by several
     planes, has none to name. Each as ``normal``, ``offset``, ``p90_relative`` (to ``diagonal``), best first.
     ``to_surface``: :func:`~filter_symblend.core.mirror_fill.distance_to` of the surface, if already built."""
-    queries = evenly(points, SCREEN_SAMPLES)
+    queries = evenly(surface_vertices(points, faces), SCREEN_SAMPLES)
     to_surface = to_surface or distance_to(points, faces)
     normal = np.asarray(measured[0], dtype=float)
     others = [plane for plane in planes if abs(np.asarray(plane[0], dtype=float) @ normal) < np.cos(DISTINCT)]
@@ -124,7 +127,7 @@ def output_asymmetry(points: np.ndarray, faces: np.ndarray, starts: list[MirrorP
     """The ``after`` side of :func:`before_and_after`: against the ``solved`` pairs' plane on the output
     refined, or without it the best plane reached from the input's ``starts`` (:func:`best_plane_from`),
     relative to the input's ``diagonal``; ``plane_from`` says which."""
-    plane = best_plane_from(points, starts if solved is None else [solved], CHECK_CONVERGED)
+    plane = best_plane_from(surface_vertices(points, faces), starts if solved is None else [solved], CHECK_CONVERGED)
     measured = mirror_asymmetry(points, faces, plane=plane, samples=samples, diagonal=diagonal)
     return {**measured, "plane_from": BEST if solved is None else SOLVED}
 
@@ -144,23 +147,26 @@ def mirror_asymmetry(points: np.ndarray, faces: np.ndarray, initial: MirrorFit |
                      diagonal: float | None = None, to_surface=None) -> dict:
     """The surface against its own reflection across its fitted plane.
 
-    ``plane``: the result of ``fit_surface_mirror_plane(points,
-    initial)`` when it is already known, so it is not fitted again. ``samples``: measure
-    at most that many evenly strided vertices (all by default). ``diagonal``: the length the
+    ``plane``: the result of ``fit_surface_mirror_plane`` of the surface's vertices from ``initial`` when it
+    is already known, so it is not fitted again. ``samples``: measure at most that many evenly strided
+    vertices of the surface (all by default; vertices no face uses are left out). ``diagonal``: the length the
     ``*_relative`` figures divide by (default the surface's own bounding-box diagonal). ``to_surface``:
     :func:`~filter_symblend.core.mirror_fill.distance_to` of the surface, if already built.
 
     Returns ``{"max", "mean", "rms", "p50", "p90", "p99"}`` (mesh units), the
     same relative to the bounding-box diagonal (``*_relative``), the plane (``plane_normal``,
-    ``plane_offset``), ``measured_vertices`` and ``per_vertex`` distances (one per
-    measured vertex).
+    ``plane_offset``), ``measured_vertices`` and ``per_vertex`` distances (one per measured vertex; with
+    ``samples`` None one per vertex, those no face uses included though not in the figures).
     """
-    normal, offset = fit_surface_mirror_plane(points, initial) if plane is None else plane
-    queries = points if samples is None else evenly(points, samples)
+    on = on_surface(faces, len(points))
+    surface = points if on.all() else points[on]
+    normal, offset = fit_surface_mirror_plane(surface, initial) if plane is None else plane
+    queries = points if samples is None else evenly(surface, samples)
     distances = mirror_distances(points, faces, normal, offset, queries, to_surface)
     if diagonal is None:
         diagonal = bounding_diagonal(points)
-    stats = distance_summary(distances)
+    measured = distances[on] if samples is None else distances
+    stats = distance_summary(measured)
     return {**stats, **{f"{k}_relative": v / diagonal for k, v in stats.items()},
             "plane_normal": np.asarray(normal, dtype=float).tolist(), "plane_offset": float(offset),
-            "measured_vertices": len(queries), "per_vertex": distances}
+            "measured_vertices": len(measured), "per_vertex": distances}

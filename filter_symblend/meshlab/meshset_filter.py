@@ -22,6 +22,7 @@ import numpy as np
 import pymeshlab
 
 from ..core.landmark_pairs import LandmarkPairs
+from ..core.mesh_quantities import on_surface
 from ..core.report import LandmarkAsymmetry, Report
 from ..errors import MeshSetError, ParameterError, SymblendWarning
 from ..measures.checks import Checks
@@ -61,9 +62,7 @@ def _missing_region(mesh: pymeshlab.Mesh, faces: np.ndarray, region: str, weight
     missing = mesh.vertex_selection_array().astype(float)
     unselected_face_at = np.zeros(mesh.vertex_number(), dtype=bool)
     unselected_face_at[faces[~selected_faces].ravel()] = True
-    used = np.zeros(mesh.vertex_number(), dtype=bool)
-    used[faces.ravel()] = True
-    missing[used & ~unselected_face_at] = 1.0
+    missing[on_surface(faces, mesh.vertex_number()) & ~unselected_face_at] = 1.0
     if not missing.any():
         warnings.warn(f"`missing_region='selection'`, but no vertex of the current mesh ('{mesh.label()}') is "
                       "selected, nor surrounded by selected faces: nothing is filled. (Hole filling selects "
@@ -136,7 +135,7 @@ def _compute(mesh: pymeshlab.Mesh, options: dict, found: dict, given: LandmarkPa
     def check_input(mirror_pairs) -> Future:
         """Submit the input's check, against the plane of the pairs solved; the future of its planes."""
         solved = _solved_plane(points, problem.landmarks, mirror_pairs)
-        starts = pool.submit(_timed, seconds, "input_planes", input_planes, points, solved)
+        starts = pool.submit(_timed, seconds, "input_planes", input_planes, points, faces, solved)
         checks["before"] = pool.submit(_timed, seconds, "mirror_asymmetry_before", _mirror_check, input_asymmetry,
                                        points, faces, starts, diagonal, solved)
         return starts

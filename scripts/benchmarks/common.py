@@ -114,9 +114,3 @@ def quiet(function, *args, **kwargs):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SymblendWarning)
         return function(*args, **kwargs)
-
-
-def referenced(faces: np.ndarray, count: int) -> np.ndarray:
-    used = np.zeros(count, dtype=bool)
-    used[faces.ravel()] = True
-    return used if len(faces) else np.ones(count, dtype=bool)

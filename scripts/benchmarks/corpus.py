@@ -15,6 +15,7 @@ from scipy.spatial import cKDTree
 from filter_symblend import SymblendError, symmetrize
 from filter_symblend.core.geometry import flat_normal, reflection_across_plane, voxel_grid
 from filter_symblend.core.mesh_graph import vertex_adjacency
+from filter_symblend.core.mesh_quantities import on_surface
 from filter_symblend.core.mirror_fill import distances_to_surface
 from filter_symblend.core.mirror_planes import fit_surface_mirror_plane
 from filter_symblend.measures.hausdorff import two_way_distance
@@ -23,7 +24,7 @@ from filter_symblend.testing import synthetic
 from filter_symblend.testing.remeshing import remeshed
 from filter_symblend.testing.surface_truth import vertex_truth
 
-from .common import EXACT, MESHES, SAMPLES, SHARED, load, quiet, referenced
+from .common import EXACT, MESHES, SAMPLES, SHARED, load, quiet
 
 CORPUS_FILES = [SHARED / name for name in ("spot.obj", "woody.obj", "homer.obj", "cheburashka.obj", "fandisk.obj",
                                             "rocker-arm.obj", "stanford-bunny.obj", "igea.ply")] + \
@@ -46,7 +47,7 @@ def pieces(faces: np.ndarray, count: int) -> int:
     if not len(faces):
         return count
     labels = connected_components(vertex_adjacency(faces, count), directed=False)[1]
-    return len(np.unique(labels[referenced(faces, count)]))
+    return len(np.unique(labels[on_surface(faces, count)]))
 
 
 def outline_distances(points: np.ndarray, faces: np.ndarray, normal, offset) -> np.ndarray:
@@ -64,7 +65,7 @@ def mirror_statistics(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """RMS, median and 90th percentile (% of the diagonal) of the distance from each referenced vertex to
     the surface reflected across its best mirror plane, fitted afresh (an independent measure); for a flat
     mesh, from each vertex of its outline to the reflected outline."""
-    used = referenced(faces, len(points))
+    used = on_surface(faces, len(points))
     plane = fit_surface_mirror_plane(points[used])
     if len(faces) and flat_normal(points[used]) is not None:
         distance = outline_distances(points, faces, *plane)
@@ -75,9 +76,9 @@ def mirror_statistics(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 
 def surface_hausdorff(before: np.ndarray, after: np.ndarray, faces: np.ndarray) -> float:
-    """Two-way Hausdorff distance between two embeddings of one mesh, from every vertex of each to the other
-    (the package's check, unsampled), % of the diagonal of the referenced vertices."""
-    used = referenced(faces, len(before))
+    """Two-way Hausdorff distance between two embeddings of one mesh, from every vertex on each surface to the
+    other (the package's check, unsampled), % of the diagonal of those vertices."""
+    used = on_surface(faces, len(before))
     distance = two_way_distance(before, faces, after, faces, samples=len(before))["max"]
     return 100 * distance / np.linalg.norm(np.ptp(before[used], axis=0))
 
@@ -126,7 +127,7 @@ def corpus_cases():
 def core_seconds(points: np.ndarray, faces: np.ndarray, mode: str) -> float:
     """Seconds of the paper's method with 2,000 landmark pairs (fewer if the mesh has fewer): the vertices'
     approximate mirror partners across the mesh's best plane, spread by a voxel grid."""
-    used = np.flatnonzero(referenced(faces, len(points)))
+    used = np.flatnonzero(on_surface(faces, len(points)))
     normal, offset = fit_surface_mirror_plane(points[used])
     partner = used[cKDTree(points[used]).query(reflection_across_plane(points[used], normal, offset))[1]]
     left = used[(points[used] @ normal > offset) & (partner != used)]
