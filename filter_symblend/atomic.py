@@ -8,6 +8,8 @@ import os
 import pathlib
 from collections.abc import Iterator
 
+_PARTIAL: set[pathlib.Path] = set()  # this process's temporary files not yet renamed over their targets
+
 
 @contextlib.contextmanager
 def replaced_when_done(path: str | os.PathLike) -> Iterator[pathlib.Path]:
@@ -15,6 +17,7 @@ def replaced_when_done(path: str | os.PathLike) -> Iterator[pathlib.Path]:
     the same format); it replaces ``path`` when the block ends without error and is removed in any case."""
     path = pathlib.Path(path)
     temporary = path.with_name(f".{path.stem}.symblend-partial{path.suffix}")
+    _PARTIAL.add(temporary)
     try:
         yield temporary
         os.replace(temporary, path)
@@ -23,6 +26,15 @@ def replaced_when_done(path: str | os.PathLike) -> Iterator[pathlib.Path]:
             raise OSError(error.errno, error.strerror, str(path)) from error
         raise
     finally:
+        temporary.unlink(missing_ok=True)
+        _PARTIAL.discard(temporary)
+
+
+def remove_partial_files() -> None:
+    """Remove the temporary files of this process's writes in progress: for a process that must stop at once
+    (a batch worker on SIGTERM) without unwinding, which an exception raised by a signal handler cannot
+    promise (Python ignores one raised while it runs a finalizer)."""
+    for temporary in list(_PARTIAL):
         temporary.unlink(missing_ok=True)
 
 

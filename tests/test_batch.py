@@ -237,6 +237,42 @@ def test_the_summary_gives_the_confident_share_of_automatic_pairs(study, tmp_pat
     assert 0.9 < float(auto["confident_share"]) <= 1.0 and landmarks["confident_share"] == ""
 
 
+WORKER_IN_A_FINALIZER = """
+import sys, time
+from filter_symblend.atomic import all_or_none
+from filter_symblend.commands.batch import _start_worker
+
+class Slow:
+    def __del__(self):  # SIGTERM arrives here: an exception raised by the handler would be ignored
+        print("ready", flush=True)
+        time.sleep(5)
+
+_start_worker()
+with all_or_none([sys.argv[1], sys.argv[2]]) as (mesh, report):
+    mesh.write_text("partial mesh")
+    Slow()
+    report.write_text("partial report")
+"""
+
+
+def test_a_worker_stopped_inside_a_finalizer_exits_at_once_and_leaves_no_partial_file(tmp_path):
+    """SIGTERM reaches a batch worker wherever Python is, a finalizer included (where an exception raised by
+    the handler is ignored and the row went on): the worker exits 143 at once and its temporary files are gone."""
+    import signal
+    import subprocess
+    import sys
+    import time
+    worker = subprocess.Popen([sys.executable, "-c", WORKER_IN_A_FINALIZER, str(tmp_path / "a.ply"),
+                               str(tmp_path / "a.json")], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert worker.stdout.readline() == "ready\n"
+    start = time.monotonic()
+    worker.send_signal(signal.SIGTERM)
+    _, err = worker.communicate(timeout=30)
+    assert worker.returncode == 143, err
+    assert time.monotonic() - start < 3  # not after the finalizer's 5 s
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_sigterm_stops_a_study_at_once_keeps_the_finished_specimens_and_the_next_run_finishes_it(tmp_path):
     """A cluster's time limit sends SIGTERM: the running specimen stops, leaving no partial file, the ones not
     started are not run, the folder is unlocked, the finished ones are whole; the same command finishes the rest."""

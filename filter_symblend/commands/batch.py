@@ -23,7 +23,7 @@ import warnings
 
 from threadpoolctl import threadpool_limits
 
-from ..atomic import write_text
+from ..atomic import remove_partial_files, write_text
 from ..errors import SymblendError
 from ..landmarks.formats import Landmark, LandmarkSet, write_tps_study
 from .shared.console import one_line, terminal_progress
@@ -137,16 +137,9 @@ def _done_before(row: Row) -> dict:
             **_from_saved(saved, ms.current_mesh().vertex_matrix())}
 
 
-class _Stopped(BaseException):
-    """SIGTERM in a worker while it runs a row: the row's partial outputs are removed on the way out."""
-
-
-_RUNNING = False  # in a worker: whether a row is running (SIGTERM then unwinds it, else the worker just exits)
-
-
 def _stop_worker(signum, frame) -> None:
-    if _RUNNING:
-        raise _Stopped()
+    """SIGTERM in a worker: its row's partial outputs removed, it exits at once."""
+    remove_partial_files()
     os._exit(EXIT_TERMINATED)
 
 
@@ -157,14 +150,7 @@ def _start_worker() -> None:
 
 
 def _row_and_summary(row: Row) -> tuple[Row, dict]:
-    global _RUNNING
-    _RUNNING = True
-    try:
-        return row, run_row(row)
-    except _Stopped:
-        os._exit(EXIT_TERMINATED)  # its outputs' temporary files are gone; the batch reports the stop
-    finally:
-        _RUNNING = False
+    return row, run_row(row)
 
 
 def _local(rows: list[Row], workers: int):
