@@ -18,7 +18,10 @@ correspondences via functional maps*, SIGGRAPH Asia 2018):
 
 The map is then refined to a point map by ZoomOut (Melzi et al., SIGGRAPH Asia 2019): point map ->
 functional map on k functions -> point map, with k growing, each functional map projected onto the
-symmetric orthogonal matrices (a mirror applied twice is the identity).
+symmetric orthogonal matrices (a mirror applied twice is the identity). Its steps map a farthest-point sample
+of the vertices only, each carrying the mass of the vertices nearest it, and the last functional map gives
+every vertex its twin (as Magnet and Ovsjanikov, *Scalable and efficient functional map computations on dense
+meshes*, Eurographics 2023, do).
 
 A compression changes surface distances, and a strong bend of a thick shape stretches one flank and
 shrinks the other; the result is then a rough map, refined extrinsically afterwards
@@ -34,9 +37,11 @@ import numpy as np
 import scipy.sparse as sparse
 from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import ArpackNoConvergence, eigsh
+from scipy.spatial import cKDTree
 
 from ..core.geometry import voxel_grid
 from ..core.mesh_graph import vertex_adjacency
+from ..core.mesh_quantities import farthest_point_order
 from ..core.parallel import in_threads
 from .config import AutoConfig
 
@@ -47,6 +52,9 @@ DESCRIPTOR_SCALES = 8
 # terms (each scaled to the descriptors' size): equal footing.
 COMMUTATIVITY_WEIGHT = 1.0
 
+# Vertices a ZoomOut step maps (farthest-point sampled): each step's exhaustive search costs samples x n, not
+# n x n; a mesh with fewer vertices maps them all.
+ZOOMOUT_SAMPLES = 1500
 POINT_MAP_ROWS = 512  # rows of point_map's distance block: 512 x n float32, 10 MB at n = 5,000
 MINIMUM_TRIANGLES = 48  # a working mesh with fewer cannot carry a dozen eigenfunctions (four triangles each)
 # First functional map sizes (eigenfunctions) tried: the sign solve is sensitive to the size where the pose is
@@ -215,14 +223,15 @@ def mirror_functional_map(points: np.ndarray, faces: np.ndarray, basis: Eigenbas
     return closest_symmetric_orthogonal(solution.reshape(count, count, order="F"))
 
 
-def point_map(functions: np.ndarray, functional: np.ndarray) -> np.ndarray:
+def point_map(functions: np.ndarray, functional: np.ndarray, queries: np.ndarray | None = None) -> np.ndarray:
     """(n,) vertex map of a functional map: each vertex goes to the vertex whose spectral coordinates are
-    nearest its own mapped ones (``functions`` (n, k) @ ``functional`` (k, k)). Exhaustive, by blocks of
+    nearest its own mapped ones (``functions`` (n, k) @ ``functional`` (k, k)); with ``queries`` (q,), the
+    twins of those vertices only (q,). Exhaustive, by blocks of
     POINT_MAP_ROWS rows of |y|^2 - 2 x.y in float32: in 12-60 dimensions a k-d tree prunes little (on 5,000
     vertices 0.9 s against 0.027 s at 60), and ZoomOut calls this about 50 times a run. float32 is 3x
     faster than float64; on four BCICP shapes it changed the ZoomOut twin of 0-16 of about 5,000 vertices
     (near ties) and no figure of the benchmark (docs/benchmarks.md)."""
-    mapped = (functions @ functional).astype(np.float32)
+    mapped = ((functions if queries is None else functions[queries]) @ functional).astype(np.float32)
     functions = functions.astype(np.float32)
     squares = np.einsum("ij,ij->i", functions, functions)
     doubled = -2.0 * functions.T  # one product and one sum in place a block: 1.6x the three passes before
@@ -234,13 +243,37 @@ def point_map(functions: np.ndarray, functional: np.ndarray) -> np.ndarray:
     return nearest
 
 
-def zoomout(basis: Eigenbasis, vertex_map: np.ndarray, start: int, stop: int, step: int) -> np.ndarray:
-    """ZoomOut: the vertex map refined on ``start``..``stop`` eigenfunctions, ``step`` at a time."""
-    for count in range(start, stop + 1, step):
+@dataclasses.dataclass(frozen=True)
+class SpectralSample:
+    """The vertices ZoomOut's steps map, ``vertices`` (s,), each with the mass (s,) of the vertices nearest
+    it: the quadrature of the functional map's inner products."""
+
+    vertices: np.ndarray
+    mass: np.ndarray
+
+    @classmethod
+    def of(cls, points: np.ndarray, mass: np.ndarray, count: int = ZOOMOUT_SAMPLES) -> SpectralSample:
+        """``count`` vertices of ``points`` (n, 3) by farthest-point sampling, each with the ``mass`` (n,) of
+        the vertices nearest it; every vertex with its own mass when there are no more than ``count``."""
+        if len(points) <= count:
+            return cls(np.arange(len(points)), mass)
+        vertices = np.sort(farthest_point_order(points, count))
+        _, nearest = cKDTree(points[vertices]).query(points)
+        return cls(vertices, np.bincount(nearest, weights=mass, minlength=count))
+
+
+def zoomout(basis: Eigenbasis, twins: np.ndarray, start: int, stop: int, step: int,
+            sample: SpectralSample) -> np.ndarray:
+    """ZoomOut: the map refined on ``start``..``stop`` eigenfunctions, ``step`` at a time, from the ``twins``
+    (s,) of the ``sample``'s vertices; the (n,) vertex map of every vertex by the last functional map."""
+    counts = list(range(start, stop + 1, step))
+    for count in counts:
         functions = basis.functions[:, :count]
-        functional = functions.T @ (basis.mass[:, None] * functions[vertex_map])
-        vertex_map = point_map(functions, closest_symmetric_orthogonal(functional))
-    return vertex_map
+        functional = closest_symmetric_orthogonal(
+            functions[sample.vertices].T @ (sample.mass[:, None] * functions[twins]))
+        if count != counts[-1]:
+            twins = point_map(functions, functional, sample.vertices)
+    return point_map(functions, functional)
 
 
 def reversed_triangles(points: np.ndarray, faces: np.ndarray, vertex_map: np.ndarray) -> np.ndarray:
@@ -305,13 +338,15 @@ def candidate_mirrors(mesh: WorkingMesh, config: AutoConfig) -> list[CandidateMi
     steps = {min(size, len(basis.values)): step for size, step in config.zoomout_sizes}
     sizes = {size: Eigenbasis(basis.values[:size], basis.functions[:, :size], basis.mass) for size in steps}
     descriptors = {size: heat_kernel_signatures(truncated, DESCRIPTOR_SCALES) for size, truncated in sizes.items()}
+    sample = SpectralSample.of(mesh.points, basis.mass)
     tasks = [(start, size, step) for size, step in steps.items() for start in STARTS if start + 2 <= size]
 
     def candidate(task: tuple[int, int, int]) -> CandidateMirror:
         start, size, step = task
         truncated = sizes[size]
         functional = mirror_functional_map(mesh.points, mesh.faces, truncated, start, descriptors[size])
-        vertex_map = zoomout(truncated, point_map(truncated.functions[:, :start], functional), start, size, step)
+        twins = point_map(truncated.functions[:, :start], functional, sample.vertices)
+        vertex_map = zoomout(truncated, twins, start, size, step, sample)
         return CandidateMirror(start, size, vertex_map, descriptor_disagreement(signatures, vertex_map),
                                reversed_share(mesh.points, mesh.faces,
                                               reversed_triangles(mesh.points, mesh.faces, vertex_map)))
