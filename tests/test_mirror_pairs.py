@@ -79,9 +79,44 @@ def test_confidence_finds_the_part_a_map_gets_wrong(remeshed_cow):
               f"away {np.mean(confidence[away] >= CONFIDENT):.3f}")
         assert np.mean(confidence[in_tear] >= CONFIDENT) < 0.1
         assert np.mean(confidence[away] >= CONFIDENT) > 0.9
-        # listed wherever the prediction lands on the surface facing the mirrored way (72 % and 52 % of the tear,
-        # the rest shifted off the cow's rounded end): none while a failed round trip withheld a twin
-        assert np.mean(np.isfinite(pairs.per_vertex()[0][in_tear]).all(axis=1)) > 0.4
+        # every vertex of the tear has a twin: the surface's point nearest the prediction, supported where it lands
+        # on the surface facing the mirrored way (72 % and 52 % of the tear; the rest is shifted off the cow's
+        # rounded end, and has confidence 0)
+        twin = pairs.per_vertex()[0]
+        assert np.isfinite(twin[in_tear]).all()
+        nearest = surface.nearest_points(torn(truth.points[in_tear]))[0]
+        np.testing.assert_allclose(twin[in_tear], nearest, atol=1e-9 * surface.diagonal)
+        assert 0.4 < np.mean(confidence[in_tear] > 0) < 0.8
+        assert pairs.report.coverage < 1.0
+
+
+def test_a_twin_the_map_does_not_support_is_listed_with_confidence_nil(remeshed_cow):
+    """The true reflection of the cow, its carried normals turned over on the head (as on a thin finger, where
+    a local map's normals flip): the twins there fail the facing test, so the map does not support them; they
+    are listed all the same, exact (the ground truth's), with confidence 0; elsewhere they are confident. The
+    report's coverage counts the supported twins only."""
+    truth = remeshed_cow
+    surface = build_surface(truth.points, truth.faces)
+    offset = 0.5 * (truth.points[:, 0].max() + truth.points[:, 0].min())
+    exact = plane_map(surface, [1.0, 0.0, 0.0], offset)
+    start = truth.points[:, 2].max() - 0.2 * np.ptp(truth.points[:, 2])
+
+    def turned(normals, positions):
+        carried = exact.carry(normals, positions)
+        return np.where((positions[:, 2] > start)[:, None], -carried, carried)
+
+    pairs = mirror_pairs(MirrorMap("turned", surface, exact.predict, exact.normal, turned), surface,
+                         np.zeros(len(truth.points), dtype=bool), DEFAULT)
+    twin, confidence = pairs.per_vertex()
+    left = truth.left[surface.usable[truth.left]]
+    true_twin = truth.twins(truth.points)[surface.usable[truth.left]]
+    on_head = truth.points[left, 2] > start + 2 * surface.spacing
+    assert on_head.sum() > 30 and np.all(confidence[left[on_head]] == 0)
+    error = np.linalg.norm(twin[left] - true_twin, axis=1) / surface.spacing
+    assert np.median(error[on_head]) < 0.25 and np.percentile(error[on_head], 95) < 1.0
+    away = truth.points[left, 2] < start - 5 * surface.spacing
+    assert np.mean(confidence[left[away]] >= CONFIDENT) > 0.9
+    assert pairs.report.coverage < 0.9 < np.mean(np.isfinite(twin[surface.usable]).all(axis=1))
 
 
 def test_a_second_map_gives_the_twins_where_its_evidence_is_stronger(remeshed_cow):

@@ -142,9 +142,10 @@ class UncertaintySummary:
 @dataclasses.dataclass(frozen=True)
 class MirrorMapReport:
     """How sure a mirror map is (core/mirror_pairs): its ``map`` name; the share of the pairable vertices
-    with a twin (``coverage``), with a twin whose landing was consistent (``consistency``: twins /
-    landings) and with a confident twin (``confident_share``, confidence >= ``confidence_threshold``); the
-    median of each error in local spacings (``round_trip``, ``landing``, ``neighbours``; None without twins);
+    with a twin the map supports (``coverage``: it lands on the surface facing the mirrored way; other twins are
+    listed with confidence 0), of the landings that are supported twins (``consistency``) and with a confident
+    twin (``confident_share``, confidence >= ``confidence_threshold``); the median of each error in local
+    spacings over the supported twins (``round_trip``, ``landing``, ``neighbours``; None without any);
     other symmetries that mirror about as much of the surface and lowered the confidence where they disagree
     (``alternatives``: name -> share, auto/rivals)."""
 

@@ -13,8 +13,9 @@ from ..core.surface_points import barycentric
 from ..errors import LandmarkError
 from ..measures.hausdorff import two_way_distance
 from ..measures.surface_asymmetry import CHECK_SAMPLES, before_and_after, pairs_plane
-from .attributes import read_landmark_attributes
+from .attributes import optional_attribute, read_landmark_attributes
 from .meshset_filter import TWIN_ATTRIBUTE
+from .output_layer import CONFIDENCE_ATTRIBUTE
 
 
 def compare_layers(ms: pymeshlab.MeshSet, before: int, after: int, samples: int | None = CHECK_SAMPLES) -> dict:
@@ -32,16 +33,17 @@ def compare_layers(ms: pymeshlab.MeshSet, before: int, after: int, samples: int 
 
 def solved_planes(before: pymeshlab.Mesh, after: pymeshlab.Mesh) -> tuple:
     """The planes (measures/surface_asymmetry.pairs_plane) on ``before`` and on ``after`` of the pairs the
-    filter solved, as its output carries them: the automatic twins (TWIN_ATTRIBUTE, points of the output;
-    on the input, the same material points), else the landmark pairs of the default pair attribute
-    on the output or the input (both sides weighted above 0). (None, None) without them, or when the two
+    filter solved, as its output carries them: the automatic twins the map supports (TWIN_ATTRIBUTE, points of
+    the output, with confidence above 0; on the input, the same material points), else the landmark pairs of
+    the default pair attribute on the output or the input (both sides weighted above 0). (None, None) without them, or when the two
     meshes do not share their vertices (not a run's input and output)."""
     if before.vertex_number() != after.vertex_number():
         return None, None
     points, moved = before.vertex_matrix(), after.vertex_matrix()
     twins = _point_attribute(after, TWIN_ATTRIBUTE)
     if twins is not None:
-        vertex = np.flatnonzero(np.isfinite(twins).all(axis=1))
+        confidence = optional_attribute(after, CONFIDENCE_ATTRIBUTE)
+        vertex = np.flatnonzero(np.isfinite(twins).all(axis=1) & (True if confidence is None else confidence > 0))
         return pairs_plane(points[vertex], _on_input(twins[vertex], moved, points, after.face_matrix())), \
             pairs_plane(moved[vertex], twins[vertex])
     for mesh in (after, before):

@@ -104,10 +104,12 @@ def _timed(seconds: dict, name: str, function, *args):
 
 def _solved_plane(points: np.ndarray, landmarks, mirror_pairs):
     """The plane (measures/surface_asymmetry.pairs_plane) on ``points`` (N, 3), the input's or the output's,
-    of the pairs solved: every automatic twin of ``mirror_pairs`` when there are some, else the checked
-    ``landmarks``' pairs with both sides given (weight > 0); None when they do not fix one."""
+    of the pairs solved: every automatic twin of ``mirror_pairs`` the map supports (confidence above 0) when
+    there are some, else the checked ``landmarks``' pairs with both sides given (weight > 0); None when they do
+    not fix one."""
     if mirror_pairs is not None:
-        return pairs_plane(points[mirror_pairs.vertex], mirror_pairs.twins_on(points))
+        supported = mirror_pairs.confidence > 0
+        return pairs_plane(points[mirror_pairs.vertex[supported]], mirror_pairs.twins_on(points)[supported])
     left, right = landmarks.both_sides()
     return pairs_plane(points[left], points[right])
 

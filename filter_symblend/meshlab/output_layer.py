@@ -12,7 +12,7 @@ import pymeshlab
 
 ASYMMETRY_ATTRIBUTE = "symblend_asymmetry"
 TWIN_ATTRIBUTE = "symblend_twin"  # per-vertex point: the vertex's mirror twin on the output (NaN: none)
-CONFIDENCE_ATTRIBUTE = "symblend_pair_confidence"  # per-vertex scalar in [0, 1] (0: no twin)
+CONFIDENCE_ATTRIBUTE = "symblend_pair_confidence"  # per-vertex scalar in [0, 1] (0: no twin, or one unsupported)
 UNCERTAINTY_ATTRIBUTE = "symblend_uncertainty"  # per-vertex scalar: the spread of the restored vertex, mesh units
 _SCRATCH = ("symblend_scratch_x", "symblend_scratch_y", "symblend_scratch_z",
             "symblend_scratch_quality")
