@@ -35,8 +35,8 @@ def solved_planes(before: pymeshlab.Mesh, after: pymeshlab.Mesh) -> tuple:
     """The planes (measures/surface_asymmetry.pairs_plane) on ``before`` and on ``after`` of the pairs the
     filter solved, as its output carries them: the automatic twins the map supports (TWIN_ATTRIBUTE, points of
     the output, with confidence above 0; on the input, the same material points), else the landmark pairs of
-    the default pair attribute on the output or the input (both sides weighted above 0). (None, None) without them, or when the two
-    meshes do not share their vertices (not a run's input and output)."""
+    the default pair attribute on the output or the input (both sides weighted above 0). (None, None) without
+    them, or when the two meshes do not share their vertices (not a run's input and output)."""
     if before.vertex_number() != after.vertex_number():
         return None, None
     points, moved = before.vertex_matrix(), after.vertex_matrix()
