@@ -121,10 +121,9 @@ def test_a_twin_the_map_does_not_support_is_listed_with_confidence_nil(remeshed_
 
 def test_a_second_map_gives_the_twins_where_its_evidence_is_stronger(remeshed_cow):
     """The torn map above (3 edges off on one end of the body) with the true reflection as the second map (the
-    intrinsic mirror's role): where the torn map is doubtful each vertex takes the twin of the map with the
-    higher confidence, each map's twins and confidences computed alone, and elsewhere the torn map's; in the
-    tear that is the true reflection's, so the tear is confident again, and the report names the second map
-    with its share."""
+    intrinsic mirror's role): each vertex takes the twin of the map with the higher confidence, each map's twins
+    and confidences computed alone; in the tear that is the true reflection's, so the tear is confident again,
+    and the report names the second map with its share."""
     truth = remeshed_cow
     surface = build_surface(truth.points, truth.faces)
     offset = 0.5 * (truth.points[:, 0].max() + truth.points[:, 0].min())
@@ -142,7 +141,7 @@ def test_a_second_map_gives_the_twins_where_its_evidence_is_stronger(remeshed_co
     (torn_twin, torn_confidence), (true_twin, true_confidence) = (
         mirror_pairs(mirror, surface, none, DEFAULT).per_vertex() for mirror in (tearing, exact))
     twin, confidence = merged.per_vertex()
-    second = (torn_confidence < CONFIDENT) & (true_confidence > torn_confidence)
+    second = true_confidence > torn_confidence
     np.testing.assert_allclose(confidence, np.where(second, true_confidence, torn_confidence))
     np.testing.assert_allclose(twin[second], true_twin[second])
     np.testing.assert_allclose(twin[~second & (torn_confidence > 0)], torn_twin[~second & (torn_confidence > 0)])
