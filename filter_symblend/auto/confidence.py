@@ -59,18 +59,18 @@ def evidence(mirror: MirrorMap, sources: np.ndarray, config: AutoConfig, toleran
     neighbours (0 where not supported))."""
     surface = mirror.surface
     twins = find_twins(mirror, sources, tolerance)
-    listed = twins.facing & (twins.landing <= tolerance)
+    supported = twins.facing & (twins.landing <= tolerance)
     errors = np.zeros((len(sources), 3))
-    rows = np.flatnonzero(listed)
+    rows = np.flatnonzero(supported)
     if not len(rows):
-        return twins, listed, errors
+        return twins, supported, errors
     spacing = np.maximum(surface.local_spacing[sources[rows]], 1e-12 * surface.diagonal)
     positions, point = surface.points[sources[rows]], twins.point[rows]
     back = surface.nearest_points(twins.returned[rows])[0]
     errors[rows, 0] = np.linalg.norm(back - positions, axis=1) / spacing
     errors[rows, 1] = twins.landing[rows] / spacing
     errors[rows, 2] = _neighbour_misfit(positions, point, config) / spacing
-    return twins, listed, errors
+    return twins, supported, errors
 
 
 @dataclasses.dataclass(frozen=True)
