@@ -226,11 +226,11 @@ def mirror_functional_map(points: np.ndarray, faces: np.ndarray, basis: Eigenbas
 def point_map(functions: np.ndarray, functional: np.ndarray, queries: np.ndarray | None = None) -> np.ndarray:
     """(n,) vertex map of a functional map: each vertex goes to the vertex whose spectral coordinates are
     nearest its own mapped ones (``functions`` (n, k) @ ``functional`` (k, k)); with ``queries`` (q,), the
-    twins of those vertices only (q,). Exhaustive, by blocks of
-    POINT_MAP_ROWS rows of |y|^2 - 2 x.y in float32: in 12-60 dimensions a k-d tree prunes little (on 5,000
-    vertices 0.9 s against 0.027 s at 60), and ZoomOut calls this about 50 times a run. float32 is 3x
-    faster than float64; on four BCICP shapes it changed the ZoomOut twin of 0-16 of about 5,000 vertices
-    (near ties) and no figure of the benchmark (docs/benchmarks.md)."""
+    twins of those vertices only (q,). Exhaustive, by blocks of POINT_MAP_ROWS rows of |y|^2 - 2 x.y in
+    float32: in 12-60 dimensions a k-d tree prunes little (on 5,000 vertices 0.9 s against 0.027 s at 60), and
+    ZoomOut calls this about 110 times a run (mostly for its sample). float32 is 3x faster than float64; on
+    four BCICP shapes it changed the ZoomOut twin of 0-16 of about 5,000 vertices (near ties) and no figure of
+    the benchmark (docs/benchmarks.md)."""
     mapped = ((functions if queries is None else functions[queries]) @ functional).astype(np.float32)
     functions = functions.astype(np.float32)
     squares = np.einsum("ij,ij->i", functions, functions)
