@@ -154,7 +154,7 @@ def test_the_intrinsic_mirrors_pairs_a_vertex_off_are_put_back_on_the_exact_twin
     noisy = twin.copy()
     noisy[wrong] = tree.query(points, k=7)[1][twin[wrong], rng.integers(1, 7, np.count_nonzero(wrong))]
     assert np.linalg.norm(posed[noisy] - posed[twin], axis=1)[wrong].min() > 0.5 * spacing
-    error = np.linalg.norm(robust_twins(posed, posed[noisy], AutoConfig()) - posed[twin], axis=1)
+    error = np.linalg.norm(robust_twins(posed, posed[noisy]) - posed[twin], axis=1)
     assert np.quantile(error, 0.99) < 1e-9 * spacing
 
 

@@ -56,7 +56,7 @@ def test_a_plane_gives_an_exactly_symmetric_mesh_its_exact_mirror_vertices(blob)
     points, faces = blob
     surface = Surface(points, faces)
     twins_found = find_twins(plane_map(surface, [1.0, 0.0, 0.0], 0.0), surface.usable_index, 1e-9)
-    exact = twins_found.exact_vertex(AutoConfig(), 1e-9)
+    exact = twins_found.exact_vertex(1e-9)
     assert exact.all()
     np.testing.assert_array_equal(twins_found.vertex, twins(points)[surface.usable_index])
     off_plane = np.abs(points[surface.usable_index, 0]) > 1e-9

@@ -111,7 +111,7 @@ def _candidate(mirror: MirrorMap, geometry: Surface, sources: np.ndarray, forbid
     corners, weights = twins.corners.copy(), twins.weights.copy()
     # A twin that is a vertex (a mirrored tessellation: within a tenth of an edge, unambiguous, mutual) is that
     # vertex, not the point of a triangle the prediction's rounding reached.
-    exact = twins.exact_vertex(config)
+    exact = twins.exact_vertex()
     corners[exact] = twins.vertex[exact, None]
     weights[exact] = [1.0, 0.0, 0.0]
     point = np.einsum("kj,kji->ki", weights, geometry.points[corners])

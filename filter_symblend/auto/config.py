@@ -46,19 +46,6 @@ class AutoConfig:
         "when one registered candidate already mirrors this much of the surface (plane_suffices if a plane "
         "mirrors min_coverage: a scan, not a strong bend), the costlier ones are not tried: what is left is a "
         "strip along the midline and the scan's own asymmetry")
-    ratio: float = _field(
-        0.5, "nearest / second-nearest distance",
-        "a predicted twin is taken as a vertex only if that vertex is the unambiguous nearest one (Lowe's "
-        "ratio test): within the inner half of its neighbourhood, whatever the local sampling")
-    vertex_precision: float = _field(
-        0.1, "x the local vertex spacing",
-        "a predicted twin is taken as a vertex only within a tenth of an edge of it: a map precise enough "
-        "finds a mirrored tessellation's twins there, while on two independently sampled sides a prediction "
-        "falls that near a vertex by chance about once in thirty")
-    robust_sigmas: float = _field(
-        3.0, "robust standard deviations",
-        "landing distances beyond this many robust standard deviations (1.4826 x median) are not twins: "
-        "the usual outlier bound; on an exactly symmetric mesh it admits only exact twins")
     local_precision: float = _field(
         10.0, "x the neighbouring pairs' median misfit",
         "a vertex pair must fit the local mirror map of its neighbours nearly as well as they fit their own: "
@@ -128,15 +115,6 @@ class AutoConfig:
         10, "ICP iterations per width",
         "point-to-plane ICP converges in a few iterations where the surface is curved; 10 leave it nearly "
         "still where it is flat (the rounds refine the map on the output)")
-    involution_weight: float = _field(
-        0.1, "x the point-to-plane term",
-        "weight of m(m(x)) = x in the registration: without it a map may fold several regions onto one "
-        "(each lands on the surface); as strong as the data, it holds the map where it started, and ICP "
-        "creeps (a tenth: the median twin error on a bent cow half that at full weight)")
-    facing: float = _field(
-        0.5, "cosine",
-        "an image counts in the registration only if the surface where it lands faces within 60 degrees of "
-        "the carried normal: on a thin sheet the other face is as near, but faces away")
     screening_samples: int = _field(
         800, "vertices",
         "vertices on which each candidate map is registered before they are compared (the winner is "

@@ -33,6 +33,16 @@ RIDGE = 1e-5
 # Rounds of Tukey reweighting when a field is fitted to a rough map's pairs: wrong pairs lose their weight
 # in two or three.
 ROBUST_ROUNDS = 4
+# Distances beyond this many robust standard deviations (1.4826 x median) are outliers: the usual bound; on an
+# exactly symmetric mesh it admits only exact twins.
+ROBUST_SIGMAS = 3.0
+# An image counts in the registration only if the surface where it lands faces within 60 degrees (this cosine)
+# of the carried normal: on a thin sheet the other face is as near, but faces away.
+FACING = 0.5
+# Weight of m(m(x)) = x in the registration, x the point-to-plane term: without it a map may fold several regions
+# onto one (each lands on the surface); as strong as the data, it holds the map where it started, and ICP creeps
+# (a tenth: the median twin error on a bent cow half that at full weight).
+INVOLUTION_WEIGHT = 0.1
 
 
 class MirrorField:
@@ -71,15 +81,15 @@ class MirrorField:
         return normalize(np.linalg.solve(np.transpose(jacobians, (0, 2, 1)), normals[:, :, None])[:, :, 0])
 
 
-def robust_tolerance(values: np.ndarray, config: AutoConfig, floor: float) -> float:
-    """``robust_sigmas`` robust standard deviations of ``values`` (taken as |N(0, sigma)|), at least ``floor``."""
-    return max(config.robust_sigmas * 1.4826 * float(np.median(values)), floor) if len(values) else floor
+def robust_tolerance(values: np.ndarray, floor: float) -> float:
+    """ROBUST_SIGMAS robust standard deviations of ``values`` (taken as |N(0, sigma)|), at least ``floor``."""
+    return max(ROBUST_SIGMAS * 1.4826 * float(np.median(values)), floor) if len(values) else floor
 
 
-def tukey_weights(misfit: np.ndarray, config: AutoConfig, floor: float) -> np.ndarray:
-    """Tukey's biweight of ``misfit`` (..., k): zero beyond ``robust_sigmas`` robust deviations of the misfits
+def tukey_weights(misfit: np.ndarray, floor: float) -> np.ndarray:
+    """Tukey's biweight of ``misfit`` (..., k): zero beyond ROBUST_SIGMAS robust deviations of the misfits
     along the last axis (the bound at least ``floor``)."""
-    bound = np.maximum(config.robust_sigmas * 1.4826 * np.median(misfit, axis=-1, keepdims=True), floor)
+    bound = np.maximum(ROBUST_SIGMAS * 1.4826 * np.median(misfit, axis=-1, keepdims=True), floor)
     return (1.0 - np.minimum(misfit / bound, 1.0) ** 2) ** 2
 
 
@@ -110,21 +120,20 @@ def fit_to_pairs(field: MirrorField, x: np.ndarray, y: np.ndarray, weights: np.n
     field.weights = _ridge_solve(_point_normal_matrix(kernel, weights), right, ridge).reshape(-1, 3)
 
 
-def robust_fit(x: np.ndarray, y: np.ndarray, centres: np.ndarray, width: float, config: AutoConfig) -> MirrorField:
+def robust_fit(x: np.ndarray, y: np.ndarray, centres: np.ndarray, width: float) -> MirrorField:
     """The field through the pairs ``x`` -> ``y`` (m, 3), ``width`` and ``centres`` (c, 3) given, fitted by
-    iteratively reweighted least squares with Tukey's biweight at ``robust_sigmas`` robust deviations:
+    iteratively reweighted least squares with Tukey's biweight at ROBUST_SIGMAS robust deviations:
     pairs far off the others' smooth map weigh nothing. Its plane is the pairs' mirror plane."""
     plane = fit_mirror_plane(x, y)
     field = MirrorField(plane.normal, plane.offset, centres, width)
     weights = np.ones(len(x))
     for _ in range(ROBUST_ROUNDS):
         fit_to_pairs(field, x, y, weights, RIDGE)
-        weights = tukey_weights(np.linalg.norm(field(x) - y, axis=1), config, 1e-300)
+        weights = tukey_weights(np.linalg.norm(field(x) - y, axis=1), 1e-300)
     return field
 
 
-def refitted(field: MirrorField, positions: np.ndarray, centres: np.ndarray, width: float,
-             config: AutoConfig) -> MirrorField:
+def refitted(field: MirrorField, positions: np.ndarray, centres: np.ndarray, width: float) -> MirrorField:
     """A field of another ``width`` and ``centres`` that reproduces ``field`` at ``positions`` (m, 3)."""
     finer = MirrorField(field.normal, field.offset, centres, width)
     fit_to_pairs(finer, positions, field(positions), np.ones(len(positions)), RIDGE)
@@ -149,10 +158,10 @@ def register(field: MirrorField, surface, sample: np.ndarray, iterations: int, c
         landed, distance, landed_normals, _, _ = surface.nearest_points(images)
         facing = np.einsum("ij,ij->i", field.mirror_normals(normals, x), landed_normals)
         facing = facing if surface.is_mesh else np.abs(facing)  # a point cloud's normals are unoriented
-        near = facing > config.facing
+        near = facing > FACING
         if not near.any():
             break
-        bound = robust_tolerance(distance[near], config, floor)
+        bound = robust_tolerance(distance[near], floor)
         weights = (near & (distance <= bound)).astype(float)
         # A landed image z with normal n: n . (reflect(x) + K(x) W) = n . z
         target = np.einsum("ij,ij->i", landed_normals, landed - reflected)
@@ -161,8 +170,8 @@ def register(field: MirrorField, surface, sample: np.ndarray, iterations: int, c
         right = design.T @ (weights * target)
         # m(m(x)) = x at the current images: reflect(y) + K(y) W = x
         image_kernel = field.kernel(images)
-        matrix += config.involution_weight * _point_normal_matrix(image_kernel, weights)
-        right += config.involution_weight * ((image_kernel * weights[:, None]).T @ (x - field.reflected(images))).reshape(-1)
+        matrix += INVOLUTION_WEIGHT * _point_normal_matrix(image_kernel, weights)
+        right += INVOLUTION_WEIGHT * ((image_kernel * weights[:, None]).T @ (x - field.reflected(images))).reshape(-1)
         field.weights = _ridge_solve(matrix, right, RIDGE).reshape(-1, 3)
     return field
 

@@ -69,8 +69,8 @@ def tessellation_map(surface: Surface, maps: list[MirrorMap], sources: np.ndarra
     for mirror in maps:
         twins = find_twins(mirror, sources, tolerance)
         covered = twins.covered(tolerance)
-        precision = robust_tolerance(twins.landing[covered], config, config.coincident * surface.diagonal)
-        exact = twins.exact_vertex(config, precision, strict=False) & covered
+        precision = robust_tolerance(twins.landing[covered], config.coincident * surface.diagonal)
+        exact = twins.exact_vertex(precision, strict=False) & covered
         partner = np.full(len(surface.points), -1)
         seeds, twin = one_pair_per_vertex(sources[exact], twins.vertex[exact])
         partner[seeds], partner[twin] = twin, seeds
@@ -117,7 +117,7 @@ def registered_field(surface: Surface, sample: np.ndarray, field: MirrorField, c
     registered at each on the ``sample`` vertices."""
     centres = field_centres(surface, sample, config.field_centres)
     for width in config.field_widths:
-        field = refitted(field, surface.points[sample], centres, width * surface.diagonal, config)
+        field = refitted(field, surface.points[sample], centres, width * surface.diagonal)
         register(field, surface, sample, config.field_iterations, config)
     return field
 
@@ -165,7 +165,7 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress
     for index, (name, vertices, twins) in enumerate(_starts(surface, screening, ranked, intrinsic, config)):
         if progress is not None:
             progress(min(60.0, 8.0 * index), f"finding a mirror map: {name}")
-        field = robust_fit(surface.points[vertices], twins, centres, coarse, config)
+        field = robust_fit(surface.points[vertices], twins, centres, coarse)
         register(field, surface, screening, config.field_iterations, config)
         mirror = field_map(surface, field, f"registration from the {name}")
         shares[mirror.name] = coverage(mirror, scored, config)

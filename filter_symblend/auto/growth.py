@@ -29,6 +29,9 @@ from ..core.mesh_graph import one_pair_per_vertex
 from .config import AutoConfig
 from .surface import Surface
 
+# A predicted twin is taken as a vertex only if that vertex is the unambiguous nearest one (Lowe's ratio test,
+# nearest / second-nearest distance): within the inner half of its neighbourhood, whatever the local sampling.
+RATIO = 0.5
 # Unpaired vertices this close to a pair (x the median vertex spacing) are tried in a wave of the growth:
 # the ring around the pairs and the next.
 FRONTIER = 3.0
@@ -81,11 +84,11 @@ def affine_mirror_fits(x: np.ndarray, y: np.ndarray, weights: np.ndarray, ridge:
     return linear, cx, cy, rigid
 
 
-def _accepted(surface: Surface, sources, predicted, rigid, back, config):
+def _accepted(surface: Surface, sources, predicted, rigid, back):
     """(m,) bool and the twin vertices (m,): predictions whose nearest vertex is unambiguous, facing the
     mirrored way, and predicts the source back."""
     vertex, _, ratio = surface.nearest_vertices(predicted)
-    ok = ratio <= config.ratio
+    ok = ratio <= RATIO
     if surface.is_mesh:
         ok &= np.einsum("nij,nj,ni->n", rigid, surface.normals[sources], surface.normals[vertex]) > 0
     ok &= back(vertex) == sources
@@ -113,7 +116,7 @@ def grow(surface: Surface, partner: np.ndarray, eligible: np.ndarray, twins: np.
         def back(vertices):
             return surface.nearest_vertices(local_maps(points, partner, points[vertices], paired, tree, config)[0])[0]
 
-        ok, vertex = _accepted(surface, sources, predicted, rigid, back, config)
+        ok, vertex = _accepted(surface, sources, predicted, rigid, back)
         ok &= (partner[vertex] < 0) & twins[vertex]
         sources, vertex = one_pair_per_vertex(sources[ok], vertex[ok])
         if not len(sources):
@@ -144,7 +147,7 @@ def prune(surface: Surface, partner: np.ndarray, fixed: np.ndarray, config: Auto
     local = np.median(misfit[crossing[neighbours]], axis=1)
     precise = misfit <= np.maximum(config.local_precision * local, floor)
     vertex, _, ratio = surface.nearest_vertices(predicted)
-    agrees = precise & (vertex == partner[paired]) & (ratio <= config.ratio)
+    agrees = precise & (vertex == partner[paired]) & (ratio <= RATIO)
     if surface.is_mesh:
         agrees &= np.einsum("nij,nj,ni->n", rigid, surface.normals[paired], surface.normals[partner[paired]]) > 0
     wrong[paired[~agrees]] = True

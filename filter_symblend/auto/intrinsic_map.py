@@ -10,7 +10,7 @@ ZoomOut's point map is right only up to a vertex or two where the shape is thin 
 leg, half its vertex pairs are a vertex off). Those errors point every way, while the right pairs
 agree on one local map; so each pair's twin is replaced by where a robust local map of its
 ``NEIGHBOURS`` nearest other pairs puts it, an affine map fitted by iteratively reweighted
-least squares (Tukey's biweight, cut at ``robust_sigmas`` robust deviations of the neighbours'
+least squares (Tukey's biweight, cut at ``field.ROBUST_SIGMAS`` robust deviations of the neighbours'
 residuals): on a mesh whose vertices mirror each other it lands within 1e-4 of the spacing of the
 exact twin where the mirror is locally rigid, on one sampled independently it averages the sampling
 away. Pairs the map
@@ -40,7 +40,7 @@ ROUNDS = 8
 MINIMUM_PAIRS = 4  # the fewest pairs that determine an affine map of space
 
 
-def robust_twins(x: np.ndarray, y: np.ndarray, config: AutoConfig) -> np.ndarray:
+def robust_twins(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Twin positions (m, 3) of ``x`` (m, 3) under robust local affine maps of the other pairs ``x`` -> ``y``
     (see the module doc)."""
     k = min(NEIGHBOURS, len(x) - 1)
@@ -50,7 +50,7 @@ def robust_twins(x: np.ndarray, y: np.ndarray, config: AutoConfig) -> np.ndarray
     for _ in range(ROUNDS):
         predicted, _ = affine_mirror_maps(x[neighbours], y[neighbours], weights, x, LOCAL_MAP_RIDGE)
         residual = np.linalg.norm(predicted - y, axis=1)[neighbours]
-        tukey = tukey_weights(residual, config, 1e-12 * np.ptp(x))  # per row: the neighbours' residuals
+        tukey = tukey_weights(residual, 1e-12 * np.ptp(x))  # per row: the neighbours' residuals
         enough = np.count_nonzero(tukey, axis=1) >= MINIMUM_PAIRS
         weights[enough] = tukey[enough]
     return affine_mirror_maps(x[neighbours], y[neighbours], weights, x, LOCAL_MAP_RIDGE)[0]
@@ -88,6 +88,6 @@ def _denoised_pairs(surface: Surface, config: AutoConfig) -> tuple[np.ndarray, n
     if len(vertices) <= NEIGHBOURS:
         return None
     x, y = mesh.points[vertices], mesh.points[twin[vertices]]
-    denoised = robust_twins(x, y, config)
+    denoised = robust_twins(x, y)
     sound = np.linalg.norm(denoised - y, axis=1) <= config.landing_tolerance * surface.diagonal
     return x[sound], denoised[sound]

@@ -5,7 +5,7 @@ consistent about (it does not come back, the two do not face the mirrored way) o
 surface are dropped, and the share kept of those that landed is the round's ``consistency``. Then:
 
 - On a mesh whose vertices mirror each other (a mirrored model, a symmetric template warped onto a
-  specimen), the twins that are vertices (unambiguous, mutual, within ``vertex_precision`` of the local
+  specimen), the twins that are vertices (unambiguous, mutual, within ``twins.VERTEX_PRECISION`` of the local
   spacing) seed a growth along the surface by local mirror maps, pairs their neighbours contradict are
   pruned (:mod:`.growth`), and the tessellation's own mirror (:mod:`.connectivity`) pairs what the
   geometry cannot. If that pairs ``vertex_share`` of the vertices, the pairs are these vertex pairs,
@@ -33,7 +33,7 @@ from ..core.surface_points import vertex_points
 from ..errors import GeometryError
 from .config import AutoConfig
 from .connectivity import ring_consistent, tessellation_mirror
-from .growth import grow_and_prune
+from .growth import RATIO, grow_and_prune
 from .maps import MirrorMap
 from .report import PairSearch
 from .surface import Surface
@@ -88,11 +88,11 @@ def find_pairs(mirror: MirrorMap, sources: np.ndarray, count: int, constraints: 
     covered = twins.covered(tolerance) & ~forbidden[twins.corners].any(axis=1)
     if not covered.any():
         raise GeometryError("Automatic pairing found no vertex whose mirror image lies on the surface.")
-    # Seeds within vertex_precision of the local spacing, with no bound from the map's precision over the
+    # Seeds within VERTEX_PRECISION of the local spacing, with no bound from the map's precision over the
     # whole surface: that varies (exact on a cow's body, 1e-5 of the spacing on its swung leg under the
     # intrinsic map), and the growth, the prune and the vertex share verify every seed.
-    seeds = twins.exact_vertex(config) & covered & ~forbidden[twins.vertex]
-    beyond_chance = seeds & (surface.chance_ratio(twins.ratio) <= config.ratio)
+    seeds = twins.exact_vertex() & covered & ~forbidden[twins.vertex]
+    beyond_chance = seeds & (surface.chance_ratio(twins.ratio) <= RATIO)
     search = PairSearch(mirror.name, float(np.mean(covered)),
                         float(np.count_nonzero(covered) / max(np.count_nonzero(landed), 1)),
                         float(np.count_nonzero(beyond_chance) / np.count_nonzero(covered)))

@@ -15,8 +15,13 @@ import dataclasses
 
 import numpy as np
 
-from .config import AutoConfig
+from .growth import RATIO
 from .maps import MirrorMap
+
+# A predicted twin is taken as a vertex only within a tenth of the local vertex spacing of it: a map precise
+# enough finds a mirrored tessellation's twins there, while on two independently sampled sides a prediction falls
+# that near a vertex by chance about once in thirty.
+VERTEX_PRECISION = 0.1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -49,14 +54,14 @@ class Twins:
         """(m,) bool: sources with a sound twin landing within ``tolerance`` (mesh units)."""
         return self.sound & (self.landing <= tolerance)
 
-    def exact_vertex(self, config: AutoConfig, tolerance: float = np.inf, strict: bool = True) -> np.ndarray:
+    def exact_vertex(self, tolerance: float = np.inf, strict: bool = True) -> np.ndarray:
         """(m,) bool: sources whose twin is a vertex: the nearest vertex to the prediction, within
-        ``tolerance`` of it (mesh units: the map's precision, if known) and, if ``strict``, within ``vertex_precision``
-        of the local spacing, unambiguous and mutual (a source can be its own twin, on the midline). Not
+        ``tolerance`` of it (mesh units: the map's precision, if known) and, if ``strict``, within VERTEX_PRECISION
+        of the local spacing, unambiguous (RATIO) and mutual (a source can be its own twin, on the midline). Not
         strict: seeds for a growth that proves them (:mod:`.connectivity`)."""
-        bound = np.minimum(tolerance, config.vertex_precision * self.spacing) if strict else tolerance
+        bound = np.minimum(tolerance, VERTEX_PRECISION * self.spacing) if strict else tolerance
         near = self.vertex_distance <= bound
-        return self.sound & self.mutual & (self.ratio <= config.ratio) & near
+        return self.sound & self.mutual & (self.ratio <= RATIO) & near
 
 
 def find_twins(mirror: MirrorMap, sources: np.ndarray, tolerance: float) -> Twins:
