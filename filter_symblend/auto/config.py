@@ -95,7 +95,7 @@ class AutoConfig:
     zoomout_sizes: tuple = _field(
         ((60, 6), (100, 8)), "(eigenfunctions, eigenfunctions per step)",
         "sizes the intrinsic map is refined to by ZoomOut, each with its step: each first map gives a candidate "
-        "at each size, and the one that reverses the most of the surface is taken; coarse enough that a bend "
+        "at each size, and the one that mirrors the most of the surface is taken; coarse enough that a bend "
         "leaves them nearly unchanged, fine enough to tell a hand from the hip it rests on (60 alone and 100 "
         "alone were each best on some shapes: chosen on half of 58 BCICP shapes, checked on the other half, "
         "docs/benchmarks.md)")

@@ -14,10 +14,9 @@ and (:func:`.spectral.candidate_mirrors`):
   ``median |log HKS(x) - log HKS(m(x))|`` at most ``DESCRIPTOR_AGREEMENT`` x the same median between
   random vertices. A mirror found by the sign solve on a shape that has none (a bunny, a CAD part) leaves
   them unequal;
-- of the maps that keep them, the one that reverses the most of the surface
-  (:func:`.spectral.reversed_share`: a mirror sends each triangle onto a triangle of opposite orientation)
-  is chosen; on the posed FAUST and TOSCA shapes that no map of space pairs, it is the most accurate of the
-  five each time (docs/benchmarks.md);
+- of the maps that keep them, and of the best three refitted on their continuous parts, the one that mirrors
+  the most of the surface (:func:`.spectral.mirrored_share`: a mirror sends each triangle onto a triangle of
+  opposite orientation, and neighbours onto neighbours) is chosen (docs/automatic-pairs.md);
 - its mutual pairs whose sides lie apart (``APART`` of the diagonal), ``PAIRS`` of them spread evenly,
   each from its left side, are solved by the paper's method (a map whose pairs cannot be solved gives way
   to the next by the same score). Whether the output is more symmetric about a plane than the input is
@@ -38,7 +37,7 @@ from ..core.solve import SymmetrizationResult
 from ..errors import SymblendError
 from .config import AutoConfig
 from .intrinsic_map import spectral_candidates
-from .spectral import DESCRIPTOR_AGREEMENT, CandidateMirror
+from .spectral import DESCRIPTOR_AGREEMENT
 from .surface import Surface
 
 PAIRS = 300  # pairs solved per start: a coarse intrinsic map gives a few hundred sound ones on a 5,000-vertex body
@@ -56,14 +55,14 @@ def intrinsic_start(surface: Surface, config: AutoConfig, solve_pairs: Callable[
     if candidates is None:
         return None, tried
     for candidate in sorted(candidates, key=lambda mirror: (mirror.size, mirror.start)):
-        entry = tried["starts"][_key(candidate)] = {"descriptor_disagreement": candidate.descriptor_disagreement}
+        entry = tried["starts"][candidate.name] = {"descriptor_disagreement": candidate.descriptor_disagreement}
         if candidate.keeps_descriptors:
-            entry["reversed_share"] = candidate.reversed_share
+            entry["mirrored_share"] = candidate.mirrored_share
     # each vertex of the working mesh stands for the usable input vertex nearest it
     vertex_of = surface.usable_index[surface.vertex_tree.query(mesh.points)[1]]
     for candidate in filter(lambda mirror: mirror.keeps_descriptors, candidates):
         vertex_map = candidate.vertex_map
-        entry = tried["starts"][_key(candidate)]
+        entry = tried["starts"][candidate.name]
         mutual = vertex_map[vertex_map] == np.arange(len(vertex_map))
         left = spread_left_sides(mesh.points, mesh.points[vertex_map], mutual, PAIRS, surface.diagonal)
         left, right = vertex_of[left], vertex_of[vertex_map[left]]
@@ -77,14 +76,9 @@ def intrinsic_start(surface: Surface, config: AutoConfig, solve_pairs: Callable[
             entry["refused"] = str(error)
             continue
         entry["surface_asymmetry"] = asymmetry_of(result)
-        tried["chosen"] = _key(candidate)
+        tried["chosen"] = candidate.name
         return result, tried
     return None, tried
-
-
-def _key(candidate: CandidateMirror) -> str:
-    """A candidate's name in the report: its first size and its ZoomOut size ("12 -> 100")."""
-    return f"{candidate.start} -> {candidate.size}"
 
 
 def cannot_start(tried: dict) -> str:
