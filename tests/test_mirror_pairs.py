@@ -14,6 +14,7 @@ from filter_symblend.auto.maps import MirrorMap, plane_map
 from filter_symblend.auto.surface import build_surface
 from filter_symblend.core.mirror_pairs import CONFIDENT
 from filter_symblend.testing import synthetic
+from conftest import symmetric_blob, twins
 
 pytestmark = pytest.mark.auto
 
@@ -153,6 +154,39 @@ def test_a_second_map_gives_the_twins_where_its_evidence_is_stronger(remeshed_co
     np.testing.assert_array_equal(alone.per_vertex()[1], torn_confidence)
 
 
+def test_a_vertex_map_gives_its_exact_twins_where_its_evidence_is_stronger_and_not_where_it_is_scrambled():
+    """The bumpy blob (exact vertex twins across x = 0): the chosen map torn on one end (3 edges off), and as the
+    third opinion (the intrinsic mirror's own vertex map) the exact vertex twins, scrambled on another end. In
+    the tear each vertex takes its exact twin, confident (round trip and neighbours exact); where the vertex map
+    is scrambled its round trip fails, and the chosen map's twins stand."""
+    points, faces = symmetric_blob(4)
+    surface = build_surface(points, faces)
+    exact = plane_map(surface, [1.0, 0.0, 0.0], 0.0, name="true reflection")
+    top, bottom = points[:, 2].max() - 0.3 * np.ptp(points[:, 2]), points[:, 2].min() + 0.3 * np.ptp(points[:, 2])
+
+    def torn(x):
+        predicted = exact.predict(x)
+        predicted[x[:, 2] > top] += [0.0, 0.0, -3.0 * surface.spacing]
+        return predicted
+
+    tearing = MirrorMap("torn", surface, torn, exact.normal, exact.carry)
+    true = twins(points)
+    scrambled = true.copy()
+    low = np.flatnonzero(points[:, 2] < bottom)
+    scrambled[low] = np.random.default_rng(4).permutation(low)
+    none = np.zeros(len(points), dtype=bool)
+    merged = mirror_pairs(tearing, surface, none, DEFAULT, vertex_map=scrambled)
+    torn_twin, torn_confidence = mirror_pairs(tearing, surface, none, DEFAULT).per_vertex()
+    twin, confidence = merged.per_vertex()
+    in_tear = points[:, 2] > top + 3 * surface.spacing
+    assert np.mean(np.all(twin[in_tear] == points[true[in_tear]], axis=1)) > 0.95
+    assert np.mean(confidence[in_tear] >= CONFIDENT) > 0.95 and np.mean(torn_confidence[in_tear] >= CONFIDENT) < 0.1
+    in_scramble = points[:, 2] < bottom - 3 * surface.spacing
+    kept = np.all(twin[in_scramble] == torn_twin[in_scramble], axis=1)
+    assert np.mean(kept) > 0.95 and np.mean(confidence[in_scramble] >= CONFIDENT) > 0.9
+    assert re.fullmatch(r"torn; the intrinsic vertex map for \d+% of the vertices", merged.report.map)
+
+
 def test_find_mirror_pairs_refuses_landmark_pairs_alone():
     points, faces = synthetic.icosphere(2)
     with pytest.raises(ParameterError, match="pairs='landmarks' has no mirror map to return"):
@@ -188,7 +222,6 @@ def test_an_automatic_run_in_a_meshset_carries_the_map_on_its_output(bent_remesh
 def bent_blob_file(tmp_path_factory):
     """An exactly symmetric bumpy sphere (every vertex has an exact twin), bent, as an OBJ file."""
     import pymeshlab
-    from conftest import symmetric_blob, twins
     points, faces = symmetric_blob(4)
     deformed = synthetic.bend(points, 0.5)
     path = tmp_path_factory.mktemp("blob") / "blob_bent.obj"

@@ -123,8 +123,36 @@ def _candidate(mirror: MirrorMap, geometry: Surface, sources: np.ndarray, forbid
                       twins.landing <= tolerance)
 
 
+def _vertex_map_candidate(partner: np.ndarray, geometry: Surface, sources: np.ndarray, forbidden: np.ndarray,
+                          config: AutoConfig, rivals: list[Rival]) -> _Candidate:
+    """The twins of the ``sources`` (m,) under a vertex map ``partner`` (N,) (-1: none), none on a ``forbidden``
+    vertex, with the confidence of :func:`_candidate`'s evidence: the round trip ``partner[partner[x]]`` and the
+    neighbours' affine map (a vertex map lands on the surface by construction)."""
+    twin = partner[sources]
+    listed = (twin >= 0) & ~forbidden[np.maximum(twin, 0)]
+    rows = np.flatnonzero(listed)
+    errors = np.full((len(sources), 3), np.inf)
+    spacing = np.maximum(geometry.local_spacing[sources[rows]], 1e-12 * geometry.diagonal)
+    positions, point = geometry.points[sources[rows]], geometry.points[twin[rows]]
+    back = partner[twin[rows]]
+    errors[rows, 0] = np.where(back >= 0, np.linalg.norm(geometry.points[back] - positions, axis=1), np.inf) / spacing
+    errors[rows, 1] = 0.0
+    errors[rows, 2] = _neighbour_misfit(positions, point, config) / spacing
+    confidence = np.zeros(len(sources))
+    confidence[rows] = np.exp(-0.5 * np.sum(errors[rows] ** 2, axis=1))
+    if rivals and len(rows):
+        confidence[rows] *= rival_agreement(rivals, positions, point, spacing)
+    corners = np.zeros((len(sources), 3), dtype=np.int64)
+    corners[rows] = twin[rows, None]
+    weights = np.zeros((len(sources), 3))
+    weights[:, 0] = 1.0
+    supported = listed & np.isfinite(errors[:, 0])
+    return _Candidate(listed, supported, corners, weights, geometry.points[corners[:, 0]], errors, confidence, listed)
+
+
 def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, config: AutoConfig,
-                 rivals: list[Rival] = (), second: MirrorMap | None = None) -> MirrorPairs:
+                 rivals: list[Rival] = (), second: MirrorMap | None = None,
+                 vertex_map: np.ndarray | None = None) -> MirrorPairs:
     """The twins of every pairable vertex of ``geometry`` (the input surface; ``mirror`` may live on a
     symmetrized output of it) that ``mirror`` predicts one for, with confidence 0 where it does not support it
     (see the module doc), none on or toward a ``forbidden`` (N,) bool vertex;
@@ -133,17 +161,24 @@ def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, co
     A ``second`` map (the intrinsic mirror) gives the twin of each vertex where its own evidence is stronger:
     the confidence chooses per vertex (a hand the chosen map of space lost, which the intrinsic mirror follows),
     and where ``mirror`` gives none. (Where ``mirror`` was confident it stood, until both BCICP halves measured
-    the rule without that gate: 0.957 -> 0.958 and 0.919 -> 0.919 right twins, none fell.) The report's
-    ``coverage`` and ``consistency`` count supported twins."""
+    the rule without that gate: 0.957 -> 0.958 and 0.919 -> 0.919 right twins, none fell.) A ``vertex_map`` (N,)
+    (the intrinsic mirror's own, :func:`.intrinsic_map.intrinsic_vertex_map`) is a third opinion, by the same
+    rule. The report's ``coverage`` and ``consistency`` count supported twins."""
     sources = np.flatnonzero(geometry.usable & ~forbidden)
     chosen = _candidate(mirror, geometry, sources, forbidden, config, rivals)
     name = mirror.name
+    opinions = []
     if second is not None and second is not mirror:
-        other = _candidate(second, geometry, sources, forbidden, config, rivals)
+        opinions.append((second.name, lambda: _candidate(second, geometry, sources, forbidden, config, rivals)))
+    if vertex_map is not None:
+        opinions.append(("intrinsic vertex map",
+                         lambda: _vertex_map_candidate(vertex_map, geometry, sources, forbidden, config, rivals)))
+    for other_name, opinion in opinions:
+        other = opinion()
         better = (other.confidence > chosen.confidence) | (~chosen.listed & other.listed)
         if better.any():
             chosen = chosen.where(better, other)
-            name = f"{mirror.name}; the {second.name} for {np.count_nonzero(better) / len(sources):.0%} of the vertices"
+            name += f"; the {other_name} for {np.count_nonzero(better) / len(sources):.0%} of the vertices"
     listed = chosen.listed
     rows = np.flatnonzero(listed)
     # Every vertex at a listed vertex's position (an OBJ's seam duplicates) takes its twin.

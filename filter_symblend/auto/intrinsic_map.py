@@ -67,6 +67,23 @@ def spectral_candidates(surface: Surface, config: AutoConfig) -> tuple[WorkingMe
     return surface.memo(("intrinsic mirrors", config), compute)
 
 
+def intrinsic_vertex_map(surface: Surface, config: AutoConfig) -> np.ndarray | None:
+    """(N,) each usable vertex's twin vertex under the best intrinsic candidate's own vertex map, not denoised
+    (-1 for the other vertices; on a coarsened working mesh, the vertex nearest the twin cluster's centre); None
+    for a point cloud or a mesh without a spectrum. A vertex map does not mix parts that touch (an arm along the
+    torso), as the denoised pairs, a map of space, can."""
+    if not surface.is_mesh:
+        return None
+    mesh, candidates = spectral_candidates(surface, config)
+    if not candidates:
+        return None
+    input_vertex = surface.usable_index[surface.vertex_tree.query(mesh.points)[1]]
+    partner = np.full(len(surface.points), -1)
+    clustered = mesh.vertex_of >= 0
+    partner[clustered] = input_vertex[candidates[0].vertex_map[mesh.vertex_of[clustered]]]
+    return partner
+
+
 def intrinsic_pairs(surface: Surface, config: AutoConfig) -> tuple[np.ndarray, np.ndarray] | None:
     """(positions (m, 3), twin positions (m, 3)) of the working mesh's vertices under the denoised intrinsic
     mirror (see the module doc), each pair once per direction; None for a point cloud or a mesh without a

@@ -35,6 +35,7 @@ from .confidence import doubtful_map_warning, mirror_pairs
 from .config import DEFAULT, AutoConfig
 from .field import MirrorField, field_centres, register
 from .first_map import coverage, first_map, intrinsic_mirror_map
+from .intrinsic_map import intrinsic_vertex_map
 from .intrinsic_start import cannot_start, intrinsic_start
 from .maps import MirrorMap, field_map, plane_map
 from .pairs import Constraints, as_landmarks, find_pairs, spread
@@ -321,7 +322,8 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
             result = candidate
     if progress is not None:
         progress(98.0, "every vertex's twin, with its confidence")
-    twins = mirror_pairs(source, surface, forbidden, config, rivals, intrinsic)
+    vertex_map = None if intrinsic is None else intrinsic_vertex_map(surface, config)
+    twins = mirror_pairs(source, surface, forbidden, config, rivals, intrinsic, vertex_map)
     doubtful = doubtful_map_warning(twins.report)
     if doubtful is not None:
         messages.append(doubtful)
