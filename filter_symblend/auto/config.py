@@ -28,8 +28,9 @@ class AutoConfig:
         "by up to 40 % still passes)")
     plane_suffices: float = _field(
         0.95, "share of the surface",
-        "when one plane already mirrors this much of the surface, no non-rigid map can mirror much more: "
-        "the affine and registered maps are not tried (speed)")
+        "when a candidate map already mirrors this much of the surface, no other could mirror much more: "
+        "the costlier candidates are not tried (what is left is a strip along the midline and a scan's own "
+        "asymmetry)")
     field_precision: float = _field(
         0.25, "x landing_tolerance",
         "a registered field is fitted onto the surface, so much of any shape lands within the landing "
@@ -41,11 +42,6 @@ class AutoConfig:
         "what a registered field must mirror within field_precision of the landing tolerance: chosen between "
         "pymeshlab's bunny (58 %) and the remeshed cow bent 1.2 rad (72 %), checked on the Stanford bunny "
         "(53 %)")
-    field_suffices: float = _field(
-        0.98, "share of the surface",
-        "when one registered candidate already mirrors this much of the surface (plane_suffices if a plane "
-        "mirrors min_coverage: a scan, not a strong bend), the costlier ones are not tried: what is left is a "
-        "strip along the midline and the scan's own asymmetry")
     local_precision: float = _field(
         10.0, "x the neighbouring pairs' median misfit",
         "a vertex pair must fit the local mirror map of its neighbours nearly as well as they fit their own: "

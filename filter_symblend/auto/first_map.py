@@ -1,28 +1,30 @@
-"""The first mirror map of a shape with no landmarks: candidate maps, each registered, one score.
+"""The first mirror map of a shape with no landmarks: candidate maps, one score, one rule.
 
 Every map is judged by one score over the whole surface: the share of it that the map mirrors (the
 twin lands on the surface within ``landing_tolerance``, the map comes back, and the two face the
 mirrored way). A plane that mirrors a body of revolution but not the parts on its sides loses to the
 plane through the parts; a plane that mirrors the middle of a bent shape loses to a map that follows
-the bend. The candidates, cheapest first:
+the bend. One rule chooses: the candidates are made cheapest first, each scored, until one mirrors
+``plane_suffices`` of the surface (no other could mirror much more); the one that mirrors the most of all
+those made is the map, refused if it mirrors less than ``min_coverage``. The candidates, in order:
 
 1. The reflections across the best mirror planes of the surface, and across the plane of the whitened
-   shape (a shape compressed or sheared as a whole). On a mesh whose tessellation mirrors itself, the
-   tessellation's own mirror grown from their vertex twins (:mod:`.connectivity`) is exact whatever
-   the bend, and ends the search; so does a plain map that mirrors ``plane_suffices`` of the surface
-   (a rigid pose, a scan: a non-rigid map could mirror little more, and would slide on a round shape).
-2. Otherwise the shape's intrinsic mirror (:mod:`.intrinsic_map`: its denoised vertex pairs and the
-   local maps between them), which follows a swung limb and a bend where no plane does, is scored as it
-   is; and each rough guess starts a smooth mirror field, registered onto the surface (:mod:`.field`):
-   the plain maps; the coherent point drift of the best plane (:mod:`.registration`: a strong bend
-   with a compression, which ICP from a plane does not reach); the intrinsic mirror; the drift of the
-   second plane. The fields are compared registered on a small sample with a coarse field; the best is
-   registered again on more vertices with finer fields, and kept unless the intrinsic mirror mirrors
-   more of the surface (a swung limb, which no smooth field follows).
+   shape (a shape compressed or sheared as a whole).
+2. On a mesh whose tessellation mirrors itself, the tessellation's own mirror grown from the two best
+   plain maps' vertex twins (:mod:`.connectivity`): exact whatever the bend, it ends the search.
+3. Mirror fields, each started from a rough guess and registered onto the surface on a small sample with a
+   coarse field (:mod:`.field`): from each plain map; from the coherent point drift of the best plane
+   (:mod:`.registration`: a strong bend with a compression, which ICP from a plane does not reach); then the
+   shape's intrinsic mirror itself (:mod:`.intrinsic_map`: its denoised vertex pairs and the local maps
+   between them, which follow a swung limb where no smooth field does) and a field from it; a field from the
+   drift of the second plane.
+4. Last, the best field registered again on more vertices with finer fields (it takes the coarse one's place
+   if it mirrors at least as much), and the tessellation's own mirror grown from the best map's twins.
 
-A shape that no map mirrors over ``min_coverage`` of its surface is refused; so is one that only a
-registered field mirrors that much, but not within ``field_precision`` of the tolerance (a field fitted
-onto any surface lands much of it somewhere: 80 % of a bunny).
+The intrinsic mirror is a candidate of every shape no plane mirrors, even when a field suffices before it
+(it is computed anyway: its opinion on each twin is kept, :func:`.confidence.mirror_pairs`). A registered
+field that mirrors ``min_coverage`` must also do so within ``field_precision`` of the tolerance, unless a plain
+map mirrors that much (a field fitted onto any surface lands much of it somewhere: 80 % of a bunny).
 """
 
 from __future__ import annotations
@@ -43,6 +45,9 @@ from .registration import MIN_DEVIATION, POOL, SAMPLES, coherent_point_drift, re
 from .rivals import Rival, close_rivals
 from .surface import Outline, Surface
 from .twins import find_twins
+
+
+TESSELLATION = "tessellation mirror"  # the name of the tessellation's own mirror map
 
 
 def _strided(surface: Surface, count: int) -> np.ndarray:
@@ -76,7 +81,7 @@ def tessellation_map(surface: Surface, maps: list[MirrorMap], sources: np.ndarra
         partner[seeds], partner[twin] = twin, seeds
         mirrored = tessellation_mirror(surface.adjacency, partner, surface.usable)
         if mirrored is not None:
-            return pairs_map(surface, mirrored, mirror.normal, config, "tessellation mirror")
+            return pairs_map(surface, mirrored, mirror.normal, config, TESSELLATION)
     return None
 
 
@@ -97,19 +102,6 @@ def _drift_predictions(start: MirrorMap, x: np.ndarray) -> np.ndarray:
     drift = coherent_point_drift(points, start.predict(points), normals, start.mirror_normals(normals, points),
                                  MIN_DEVIATION * surface.spacing)
     return drift(start.predict(x))
-
-
-def _starts(surface: Surface, sample: np.ndarray, ranked: list[MirrorMap], intrinsic: MirrorMap | None,
-            config: AutoConfig):
-    """(name, vertices, twin positions) of each rough guess, cheapest first (see the module doc)."""
-    x = surface.points[sample]
-    for mirror in ranked:
-        yield mirror.name, sample, mirror.predict(x)
-    yield f"drift from the {ranked[0].name}", sample, _drift_predictions(ranked[0], x)
-    if intrinsic is not None:
-        yield intrinsic.name, sample, intrinsic.predict(x)
-    for mirror in ranked[1:2]:
-        yield f"drift from the {mirror.name}", sample, _drift_predictions(mirror, x)
 
 
 def registered_field(surface: Surface, sample: np.ndarray, field: MirrorField, config: AutoConfig) -> MirrorField:
@@ -135,74 +127,118 @@ class FirstMap(NamedTuple):
     intrinsic: MirrorMap | None = None
 
 
-def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress=None) -> FirstMap:
-    """The first mirror map (see the module doc); SymmetryNotFoundError when none mirrors ``min_coverage`` of
-    the surface. ``scored`` (m,): the vertices the shares are measured on."""
-    planes = surface_mirror_planes(surface.points[surface.usable_index])
+class _Search:
+    """The candidates tried, each scored once on the ``scored`` vertices: ``maps`` {name: map} and ``shares``
+    {name: share}; ``best``, the one that mirrors the most (the first tried among equals)."""
+
+    def __init__(self, scored: np.ndarray, config: AutoConfig):
+        self.scored, self.config = scored, config
+        self.maps: dict[str, MirrorMap] = {}
+        self.shares: dict[str, float] = {}
+        self.rigid: list[MirrorMap] = []  # the plain maps: planes and the whitened plane
+        self.fields: dict[str, MirrorField] = {}  # the registered candidates' fields, by name
+        self.intrinsic: MirrorMap | None = None
+
+    def score(self, mirror: MirrorMap) -> None:
+        """Score ``mirror``; a map named as one tried before (a finer registration of it) takes its place only
+        if it mirrors at least as much."""
+        share = coverage(mirror, self.scored, self.config)
+        if mirror.name not in self.shares or share >= self.shares[mirror.name]:
+            self.maps[mirror.name], self.shares[mirror.name] = mirror, share
+
+    @property
+    def best(self) -> MirrorMap:
+        """The map that mirrors the most so far."""
+        return max(self.maps.values(), key=lambda mirror: self.shares[mirror.name])
+
+    @property
+    def suffices(self) -> bool:
+        """Whether the best map mirrors ``plane_suffices`` of the surface: no other could mirror much more."""
+        return self.shares[self.best.name] >= self.config.plane_suffices
+
+
+def _candidates(surface: Surface, planes: list, search: _Search, config: AutoConfig, progress):
+    """Batches of candidate maps, cheapest first (see the module doc); each batch is scored before the next is
+    made, which may read the shares so far."""
     rigid = [plane_map(surface, *plane, name="mirror plane" if rank == 1 else f"mirror plane {rank}")
              for rank, plane in enumerate(planes[:3], 1)]
     if not isinstance(surface, Outline):  # a flat shape's mirrors are lines of its plane: the planes find them
         rigid.append(affine_map(surface))
-    shares = {mirror.name: coverage(mirror, scored, config) for mirror in rigid}
-    ranked = sorted(rigid, key=lambda mirror: -shares[mirror.name])
-    mirrored = tessellation_map(surface, ranked[:2], scored, config)
+    search.rigid = rigid
+    yield rigid
+    ranked = sorted(rigid, key=lambda mirror: -search.shares[mirror.name])
+    mirrored = tessellation_map(surface, ranked[:2], search.scored, config)
     if mirrored is not None:  # the tessellation mirrors itself: its own mirror, exact whatever the bend
-        shares[mirrored.name] = coverage(mirrored, scored, config)
-        return FirstMap(mirrored, shares, planes[0], close_rivals(mirrored, rigid, shares, scored, config))
-    if shares[ranked[0].name] >= config.plane_suffices:
-        best = _refuse_or(ranked[0], shares, config)
-        return FirstMap(best, shares, planes[0], close_rivals(best, rigid, shares, scored, config))
-    intrinsic = intrinsic_mirror_map(surface, ranked[0].normal, config)
-    if intrinsic is not None:
-        shares[intrinsic.name] = coverage(intrinsic, scored, config)
+        yield [mirrored]
+        return
     screening = _strided(surface, config.screening_samples)
+    x = surface.points[screening]
     coarse = config.field_widths[0] * surface.diagonal
     centres = field_centres(surface, screening, config.screening_centres)
-    candidates = []
-    # A scan (a plane mirrors most of it) stops at the first field that mirrors as much as a plane would
-    # need to; the costlier starts are for shapes no plane mirrors (a strong bend).
-    enough = config.plane_suffices if shares[ranked[0].name] >= config.min_coverage else config.field_suffices
-    for index, (name, vertices, twins) in enumerate(_starts(surface, screening, ranked, intrinsic, config)):
+
+    def registered(name: str, twins: np.ndarray) -> list[MirrorMap]:
         if progress is not None:
-            progress(min(60.0, 8.0 * index), f"finding a mirror map: {name}")
-        field = robust_fit(surface.points[vertices], twins, centres, coarse)
+            progress(min(60.0, 8.0 * len(search.fields)), f"finding a mirror map: {name}")
+        field = robust_fit(x, twins, centres, coarse)
         register(field, surface, screening, config.field_iterations, config)
         mirror = field_map(surface, field, f"registration from the {name}")
-        shares[mirror.name] = coverage(mirror, scored, config)
-        candidates.append((mirror, field))
-        if shares[mirror.name] >= enough:
+        search.fields[mirror.name] = field
+        return [mirror]
+
+    for mirror in ranked:
+        yield registered(mirror.name, mirror.predict(x))
+    yield registered(f"drift from the {ranked[0].name}", _drift_predictions(ranked[0], x))
+    intrinsic = search.intrinsic = intrinsic_mirror_map(surface, ranked[0].normal, config)
+    if intrinsic is not None:
+        yield [intrinsic]
+        yield registered(intrinsic.name, intrinsic.predict(x))
+    for mirror in ranked[1:2]:
+        yield registered(f"drift from the {mirror.name}", _drift_predictions(mirror, x))
+
+
+def _refined(surface: Surface, search: _Search, config: AutoConfig, progress) -> None:
+    """The search's last candidates: its best registered field registered again on more vertices with finer
+    fields (it takes the coarse one's place if it mirrors at least as much), then the tessellation's own mirror
+    grown from the best map's twins (exact, if the tessellation mirrors itself; already tried from the plain
+    maps)."""
+    if search.fields:
+        name = max(search.fields, key=lambda field: search.shares[field])
+        if progress is not None:
+            progress(60.0, f"{name}, on {config.registration_samples} vertices")
+        sample = _strided(surface, config.registration_samples)
+        search.score(field_map(surface, registered_field(surface, sample, search.fields[name], config), name))
+    best = search.best
+    if best.name not in {TESSELLATION, *(mirror.name for mirror in search.rigid)}:
+        mirrored = tessellation_map(surface, [best], search.scored, config)
+        if mirrored is not None:
+            search.score(mirrored)
+
+
+def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress=None) -> FirstMap:
+    """The first mirror map (see the module doc); SymmetryNotFoundError when none mirrors ``min_coverage`` of
+    the surface. ``scored`` (m,): the vertices the shares are measured on."""
+    planes = surface_mirror_planes(surface.points[surface.usable_index])
+    search = _Search(scored, config)
+    for batch in _candidates(surface, planes, search, config, progress):
+        for mirror in batch:
+            search.score(mirror)
+        if search.suffices:
             break
-    coarse_best, field = max(candidates, key=lambda entry: shares[entry[0].name])
-    if progress is not None:
-        progress(60.0, f"{coarse_best.name}, on {config.registration_samples} vertices")
-    sample = _strided(surface, config.registration_samples)
-    best = field_map(surface, registered_field(surface, sample, field, config), coarse_best.name)
-    share = coverage(best, scored, config)
-    if share >= shares[best.name]:  # finer fields mirror at least as much, as a rule; if not, the coarse one stays
-        shares[best.name] = share
-    else:
-        best = coarse_best
-    if intrinsic is not None and shares[intrinsic.name] > shares[best.name]:
-        best = intrinsic  # a swung limb: the pairs follow it, no smooth field does
-    tried = rigid + [mirror for mirror, _ in candidates] + ([] if intrinsic is None else [intrinsic])
-    mirrored = tessellation_map(surface, [best], scored, config)
-    if mirrored is not None:
-        shares[mirrored.name] = coverage(mirrored, scored, config)
-        return FirstMap(mirrored, shares, planes[0], _rivals(mirrored, tried + [best], shares, scored, config),
-                        intrinsic)
-    rigid_share = max(shares[mirror.name] for mirror in rigid)
+    rigid = max(search.rigid, key=lambda mirror: search.shares[mirror.name])
+    rigid_share = search.shares[rigid.name]
+    if search.intrinsic is None and rigid_share < config.plane_suffices and search.best.name != TESSELLATION:
+        # A shape no plane mirrors (a bend, a pose): the intrinsic mirror is always a candidate, and its opinion
+        # on each twin is kept (:func:`.confidence.mirror_pairs`).
+        search.intrinsic = intrinsic_mirror_map(surface, rigid.normal, config)
+        if search.intrinsic is not None:
+            search.score(search.intrinsic)
+    _refined(surface, search, config, progress)
+    best = search.best
     # A plain map that mirrors min_coverage shows a symmetry up to the scan's noise; else the field must
     # prove it within its own precision.
-    best = _refuse_or(best, shares, config, None if rigid_share >= config.min_coverage else scored)
-    return FirstMap(best, shares, planes[0], _rivals(best, tried, shares, scored, config), intrinsic)
-
-
-def _rivals(best: MirrorMap, tried: list[MirrorMap], shares: dict, scored: np.ndarray,
-            config: AutoConfig) -> list[Rival]:
-    """:func:`.rivals.close_rivals` among the maps ``tried``, each once (the finer registration of a coarse
-    candidate has its name, and its share)."""
-    by_name = {mirror.name: mirror for mirror in tried}
-    return close_rivals(best, list(by_name.values()), shares, scored, config)
+    best = _refuse_or(best, search.shares, config, None if rigid_share >= config.min_coverage else scored)
+    rivals = close_rivals(best, list(search.maps.values()), search.shares, scored, config)
+    return FirstMap(best, search.shares, planes[0], rivals, search.intrinsic)
 
 
 def _refuse_or(best: MirrorMap, shares: dict, config: AutoConfig, scored: np.ndarray | None = None) -> MirrorMap:
