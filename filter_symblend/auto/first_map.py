@@ -5,8 +5,9 @@ twin lands on the surface within ``landing_tolerance``, the map comes back, and 
 mirrored way). A plane that mirrors a body of revolution but not the parts on its sides loses to the
 plane through the parts; a plane that mirrors the middle of a bent shape loses to a map that follows
 the bend. One rule chooses: the candidates are made cheapest first, each scored, until one mirrors
-``plane_suffices`` of the surface (no other could mirror much more); the one that mirrors the most of all
-those made is the map, refused if it mirrors less than ``min_coverage``. The candidates, in order:
+enough of the surface that no other could mirror much more (``plane_suffices``, or ``field_suffices`` where no
+plain map mirrors ``min_coverage``: a strong bend, where a field can mirror 95 % and still slide); the one that
+mirrors the most of all those made is the map, refused if it mirrors less than ``min_coverage``. The candidates, in order:
 
 1. The reflections across the best mirror planes of the surface, and across the plane of the whitened
    shape (a shape compressed or sheared as a whole).
@@ -153,8 +154,15 @@ class _Search:
 
     @property
     def suffices(self) -> bool:
-        """Whether the best map mirrors ``plane_suffices`` of the surface: no other could mirror much more."""
-        return self.shares[self.best.name] >= self.config.plane_suffices
+        """Whether the best map mirrors enough of the surface that no other could mirror much more:
+        ``plane_suffices`` where a plain map mirrors ``min_coverage`` (a rigid pose, a scan) or ``plane_suffices``
+        itself, ``field_suffices`` where none does (a strong bend, a pose: a field can mirror 95 % and still
+        slide)."""
+        config = self.config
+        rigid = max(self.shares[mirror.name] for mirror in self.rigid)
+        plain = rigid >= min(config.min_coverage, config.plane_suffices)
+        enough = config.plane_suffices if plain else config.field_suffices
+        return self.shares[self.best.name] >= enough
 
 
 def _candidates(surface: Surface, planes: list, search: _Search, config: AutoConfig, progress):
