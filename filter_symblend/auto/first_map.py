@@ -7,7 +7,8 @@ plane through the parts; a plane that mirrors the middle of a bent shape loses t
 the bend. One rule chooses: the candidates are made cheapest first, each scored, until one mirrors
 enough of the surface that no other could mirror much more (``plane_suffices``, or ``field_suffices`` where no
 plain map mirrors ``min_coverage``: a strong bend, where a field can mirror 95 % and still slide); the one that
-mirrors the most of all those made is the map, refused if it mirrors less than ``min_coverage``. The candidates, in order:
+mirrors the most of all those made is the map, refused if it mirrors less than ``min_coverage``. The
+candidates, in order:
 
 1. The reflections across the best mirror planes of the surface, and across the plane of the whitened
    shape (a shape compressed or sheared as a whole).
