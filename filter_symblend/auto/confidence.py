@@ -115,19 +115,28 @@ def _candidate(mirror: MirrorMap, geometry: Surface, sources: np.ndarray, forbid
     corners[exact] = twins.vertex[exact, None]
     weights[exact] = [1.0, 0.0, 0.0]
     point = np.einsum("kj,kji->ki", weights, geometry.points[corners])
+    confidence = _confidence(errors, geometry, sources, point, rivals)
+    return _Candidate(listed, supported, corners, weights, point, errors, np.where(supported, confidence, 0.0),
+                      twins.landing <= tolerance)
+
+
+def _confidence(errors: np.ndarray, geometry: Surface, sources: np.ndarray, twins: np.ndarray,
+                rivals: list[Rival]) -> np.ndarray:
+    """(m,) ``exp(-(sum of the squared errors (m, 3))/2)`` (see the module doc), lowered where ``rivals`` put the
+    twins (m, 3) of the ``sources`` (m,) elsewhere."""
     confidence = np.exp(-0.5 * np.sum(errors**2, axis=1))
     if rivals:
         spacing = np.maximum(geometry.local_spacing[sources], 1e-12 * geometry.diagonal)
-        confidence *= rival_agreement(rivals, geometry.points[sources], point, spacing)
-    return _Candidate(listed, supported, corners, weights, point, errors, np.where(supported, confidence, 0.0),
-                      twins.landing <= tolerance)
+        confidence *= rival_agreement(rivals, geometry.points[sources], twins, spacing)
+    return confidence
 
 
 def _vertex_map_candidate(partner: np.ndarray, geometry: Surface, sources: np.ndarray, forbidden: np.ndarray,
                           config: AutoConfig, rivals: list[Rival]) -> _Candidate:
     """The twins of the ``sources`` (m,) under a vertex map ``partner`` (N,) (-1: none), none on a ``forbidden``
     vertex, with the confidence of :func:`_candidate`'s evidence: the round trip ``partner[partner[x]]`` and the
-    neighbours' affine map (a vertex map lands on the surface by construction)."""
+    neighbours' affine map (a vertex map lands on the surface by construction). Infinite errors (no twin, or no
+    way back) give confidence 0."""
     twin = partner[sources]
     listed = (twin >= 0) & ~forbidden[np.maximum(twin, 0)]
     rows = np.flatnonzero(listed)
@@ -138,16 +147,13 @@ def _vertex_map_candidate(partner: np.ndarray, geometry: Surface, sources: np.nd
     errors[rows, 0] = np.where(back >= 0, np.linalg.norm(geometry.points[back] - positions, axis=1), np.inf) / spacing
     errors[rows, 1] = 0.0
     errors[rows, 2] = _neighbour_misfit(positions, point, config) / spacing
-    confidence = np.zeros(len(sources))
-    confidence[rows] = np.exp(-0.5 * np.sum(errors[rows] ** 2, axis=1))
-    if rivals and len(rows):
-        confidence[rows] *= rival_agreement(rivals, positions, point, spacing)
-    corners = np.zeros((len(sources), 3), dtype=np.int64)
-    corners[rows] = twin[rows, None]
+    corners = np.where(listed, twin, 0)[:, None].repeat(3, axis=1)
     weights = np.zeros((len(sources), 3))
     weights[:, 0] = 1.0
+    twins = geometry.points[corners[:, 0]]
     supported = listed & np.isfinite(errors[:, 0])
-    return _Candidate(listed, supported, corners, weights, geometry.points[corners[:, 0]], errors, confidence, listed)
+    return _Candidate(listed, supported, corners, weights, twins, errors,
+                      _confidence(errors, geometry, sources, twins, rivals), listed)
 
 
 def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, config: AutoConfig,
@@ -169,12 +175,11 @@ def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, co
     name = mirror.name
     opinions = []
     if second is not None and second is not mirror:
-        opinions.append((second.name, lambda: _candidate(second, geometry, sources, forbidden, config, rivals)))
+        opinions.append((second.name, _candidate(second, geometry, sources, forbidden, config, rivals)))
     if vertex_map is not None:
         opinions.append(("intrinsic vertex map",
-                         lambda: _vertex_map_candidate(vertex_map, geometry, sources, forbidden, config, rivals)))
-    for other_name, opinion in opinions:
-        other = opinion()
+                         _vertex_map_candidate(vertex_map, geometry, sources, forbidden, config, rivals)))
+    for other_name, other in opinions:
         better = (other.confidence > chosen.confidence) | (~chosen.listed & other.listed)
         if better.any():
             chosen = chosen.where(better, other)

@@ -67,6 +67,11 @@ def spectral_candidates(surface: Surface, config: AutoConfig) -> tuple[WorkingMe
     return surface.memo(("intrinsic mirrors", config), compute)
 
 
+def input_vertices(surface: Surface, mesh: WorkingMesh) -> np.ndarray:
+    """(n,) the usable input vertex each vertex of the working ``mesh`` stands for: the one nearest it."""
+    return surface.usable_index[surface.vertex_tree.query(mesh.points)[1]]
+
+
 def intrinsic_vertex_map(surface: Surface, config: AutoConfig) -> np.ndarray | None:
     """(N,) each usable vertex's twin vertex under the best intrinsic candidate's own vertex map, not denoised
     (-1 for the other vertices; on a coarsened working mesh, the vertex nearest the twin cluster's centre); None
@@ -77,7 +82,7 @@ def intrinsic_vertex_map(surface: Surface, config: AutoConfig) -> np.ndarray | N
     mesh, candidates = spectral_candidates(surface, config)
     if not candidates:
         return None
-    input_vertex = surface.usable_index[surface.vertex_tree.query(mesh.points)[1]]
+    input_vertex = input_vertices(surface, mesh)
     partner = np.full(len(surface.points), -1)
     clustered = mesh.vertex_of >= 0
     partner[clustered] = input_vertex[candidates[0].vertex_map[mesh.vertex_of[clustered]]]

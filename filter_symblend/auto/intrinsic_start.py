@@ -36,7 +36,7 @@ from ..core.mirror_pairs import spread_left_sides
 from ..core.solve import SymmetrizationResult
 from ..errors import SymblendError
 from .config import AutoConfig
-from .intrinsic_map import spectral_candidates
+from .intrinsic_map import input_vertices, spectral_candidates
 from .spectral import DESCRIPTOR_AGREEMENT
 from .surface import Surface
 
@@ -58,8 +58,7 @@ def intrinsic_start(surface: Surface, config: AutoConfig, solve_pairs: Callable[
         entry = tried["starts"][candidate.name] = {"descriptor_disagreement": candidate.descriptor_disagreement}
         if candidate.keeps_descriptors:
             entry["mirrored_share"] = candidate.mirrored_share
-    # each vertex of the working mesh stands for the usable input vertex nearest it
-    vertex_of = surface.usable_index[surface.vertex_tree.query(mesh.points)[1]]
+    vertex_of = input_vertices(surface, mesh)
     for candidate in filter(lambda mirror: mirror.keeps_descriptors, candidates):
         vertex_map = candidate.vertex_map
         entry = tried["starts"][candidate.name]

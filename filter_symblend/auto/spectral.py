@@ -326,8 +326,9 @@ def continuous_part(points: np.ndarray, faces: np.ndarray, vertex_map: np.ndarra
     edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
     length = np.median(np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1))
     torn = np.linalg.norm(points[vertex_map[edges[:, 0]]] - points[vertex_map[edges[:, 1]]], axis=1) > TEAR * length
-    _, piece = connected_components(vertex_adjacency(np.column_stack([edges[~torn], edges[~torn, 0]]), len(points)),
-                                    directed=False)
+    kept = edges[~torn]
+    whole = sparse.coo_matrix((np.ones(len(kept)), (kept[:, 0], kept[:, 1])), shape=(len(points), len(points)))
+    _, piece = connected_components(whole, directed=False)
     largest = np.argmax(np.bincount(piece, weights=mass))
     inside = piece == largest
     return inside & inside[vertex_map]

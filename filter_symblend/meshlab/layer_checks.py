@@ -14,8 +14,7 @@ from ..errors import LandmarkError
 from ..measures.hausdorff import two_way_distance
 from ..measures.surface_asymmetry import CHECK_SAMPLES, before_and_after, pairs_plane
 from .attributes import optional_attribute, read_landmark_attributes
-from .meshset_filter import TWIN_ATTRIBUTE
-from .output_layer import CONFIDENCE_ATTRIBUTE
+from .output_layer import CONFIDENCE_ATTRIBUTE, TWIN_ATTRIBUTE
 
 
 def compare_layers(ms: pymeshlab.MeshSet, before: int, after: int, samples: int | None = CHECK_SAMPLES) -> dict:
