@@ -14,7 +14,7 @@ from filter_symblend import (GeometryError, LandmarkError, ParameterError, Symbl
 from filter_symblend.auto import AutoConfig
 from filter_symblend.auto.maps import plane_map
 from filter_symblend.auto.surface import Surface
-from filter_symblend.auto.twins import find_twins
+from filter_symblend.auto.twins import covered_by, find_twins
 from filter_symblend.core.mesh_quantities import mean_spacing, vertex_normals
 from filter_symblend.core.mirror_fill import closest_points_on_surface
 from filter_symblend.measures.surface_asymmetry import mirror_asymmetry
@@ -61,6 +61,18 @@ def test_a_plane_gives_an_exactly_symmetric_mesh_its_exact_mirror_vertices(blob)
     np.testing.assert_array_equal(twins_found.vertex, twins(points)[surface.usable_index])
     off_plane = np.abs(points[surface.usable_index, 0]) > 1e-9
     np.testing.assert_array_equal(twins_found.side[off_plane], np.sign(points[surface.usable_index, 0])[off_plane])
+
+
+def test_a_maps_coverage_is_what_its_twins_cover(blob):
+    # covered_by scores every candidate map without the nearest vertices find_twins also finds: the same answer
+    points, faces = blob
+    surface = Surface(points, faces)
+    tolerance = 0.01 * surface.diagonal
+    for normal in ([1.0, 0.2, 0.0], [1.0, 0.0, 0.5]):  # tilted planes: some vertices mirrored, some not
+        mirror = plane_map(surface, np.array(normal) / np.linalg.norm(normal), 0.0)
+        covered = covered_by(mirror, surface.usable_index, tolerance)
+        np.testing.assert_array_equal(covered, find_twins(mirror, surface.usable_index, tolerance).covered(tolerance))
+        assert 0.05 < covered.mean() < 0.95
 
 
 @pytest.fixture(scope="module")

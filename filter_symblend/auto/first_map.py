@@ -46,7 +46,7 @@ from .maps import MirrorMap, affine_map, field_map, pairs_map, plane_map, point_
 from .registration import MIN_DEVIATION, POOL, SAMPLES, coherent_point_drift, registration_sample
 from .rivals import Rival, close_rivals
 from .surface import Outline, Surface
-from .twins import find_twins
+from .twins import covered_by, find_twins
 
 
 TESSELLATION = "tessellation mirror"  # the name of the tessellation's own mirror map
@@ -62,7 +62,7 @@ def coverage(mirror: MirrorMap, sources: np.ndarray, config: AutoConfig, share: 
     """Share of the ``sources`` (m,) vertices that ``mirror`` mirrors (see the module doc), within ``share`` x
     the landing tolerance."""
     tolerance = share * config.landing_tolerance * mirror.surface.diagonal
-    return float(np.mean(find_twins(mirror, sources, tolerance).covered(tolerance)))
+    return float(np.mean(covered_by(mirror, sources, tolerance)))
 
 
 def tessellation_map(surface: Surface, maps: list[MirrorMap], sources: np.ndarray, config: AutoConfig) -> MirrorMap | None:

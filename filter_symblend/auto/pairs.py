@@ -23,6 +23,7 @@ go through :func:`~filter_symblend.core.solve.check_landmarks`, the same checks 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 import numpy as np
 
@@ -75,12 +76,27 @@ def spread(points: np.ndarray, vertices: np.ndarray, count: int) -> np.ndarray:
     return vertices[np.sort(first)]
 
 
-def find_pairs(mirror: MirrorMap, sources: np.ndarray, count: int, constraints: Constraints,
-               exact: bool | None = None) -> AutomaticPairs:
-    """About ``count`` pairs under ``mirror`` for ``sources`` (sorted vertex indices; see the module doc),
-    under the round's ``constraints``. ``exact``: whether the twins are
-    to be exact vertices; None: decided here, by the share of the twins that are (on a symmetrized output the
-    pairs it was made from always are, so the later rounds pass the first round's answer)."""
+@dataclasses.dataclass(frozen=True)
+class FoundPairs:
+    """Every pair one search under a map found (``candidates`` (k,): the vertices that may pair; ``search``: what
+    the round reports), before ``count`` of them are spread over the surface (:meth:`chosen`): the rounds take
+    1,000 of them, the last solve ``auto_pair_count`` from the same search."""
+
+    candidates: np.ndarray
+    search: PairSearch
+    _chosen: Callable[[int], AutomaticPairs]
+
+    def chosen(self, count: int) -> AutomaticPairs:
+        """About ``count`` of the pairs, spread evenly over the surface."""
+        return self._chosen(count)
+
+
+def search_pairs(mirror: MirrorMap, sources: np.ndarray, constraints: Constraints,
+                 exact: bool | None = None) -> FoundPairs:
+    """The pairs under ``mirror`` for ``sources`` (sorted vertex indices; see the module doc), under the round's
+    ``constraints``. ``exact``: whether the twins are to be exact vertices; None: decided here, by the share of
+    the twins that are (on a symmetrized output the pairs it was made from always are, so the later rounds pass
+    the first round's answer)."""
     surface, config, forbidden = mirror.surface, constraints.config, constraints.forbidden
     tolerance = config.landing_tolerance * constraints.geometry.diagonal
     twins = find_twins(mirror, sources, tolerance)
@@ -99,15 +115,16 @@ def find_pairs(mirror: MirrorMap, sources: np.ndarray, count: int, constraints: 
     if exact is not False and (exact or np.count_nonzero(seeds) > config.local_neighbours):
         # Vertex twins, perhaps: the growth from them proves it by pairing most of the vertices, which it
         # cannot do on two sides sampled independently (their vertices miss each other's local maps).
-        found = _exact_pairs(mirror, sources, twins, seeds, count, constraints, search)
+        found = _exact_pairs(mirror, sources, twins, seeds, constraints, search)
         if exact or found.search.vertex_share >= config.vertex_share:
             return found
-    usable = covered & ~forbidden[sources]
-    candidates = sources[usable]
-    chosen = spread(surface.points, candidates, count)
-    pairs = _point_pairs(surface, sources, twins, np.searchsorted(sources, chosen))
-    return AutomaticPairs(*pairs, dataclasses.replace(search, twins_are="points of the surface",
-                                                       candidates=len(candidates)))
+    candidates = sources[covered & ~forbidden[sources]]
+
+    def chosen(count: int) -> AutomaticPairs:
+        rows = np.searchsorted(sources, spread(surface.points, candidates, count))
+        return AutomaticPairs(*_point_pairs(surface, sources, twins, rows), search)
+    search = dataclasses.replace(search, twins_are="points of the surface", candidates=len(candidates))
+    return FoundPairs(candidates, search, chosen)
 
 
 def _point_pairs(surface: Surface, sources: np.ndarray, twins, rows: np.ndarray):
@@ -124,8 +141,8 @@ def _point_pairs(surface: Surface, sources: np.ndarray, twins, rows: np.ndarray)
             pick(twins.corners[rows], own_corners), pick(twins.weights[rows], own_weights), midline)
 
 
-def _exact_pairs(mirror: MirrorMap, sources: np.ndarray, twins, exact_twins: np.ndarray, count: int,
-                 constraints: Constraints, search: PairSearch) -> AutomaticPairs:
+def _exact_pairs(mirror: MirrorMap, sources: np.ndarray, twins, exact_twins: np.ndarray,
+                 constraints: Constraints, search: PairSearch) -> FoundPairs:
     """Exact vertex pairs grown from the exact twins (see the module doc); ``search`` gains what the growth
     did and ``vertex_share``, the share of the usable vertices it paired. Where the growth does not reach
     (the tip of a horn) nothing is paired: the map's twin points there would carry its tangential error
@@ -162,13 +179,15 @@ def _exact_pairs(mirror: MirrorMap, sources: np.ndarray, twins, exact_twins: np.
     left = np.flatnonzero(automatic & (partner != index) & (gap @ mirror.normal > 0))
     midline = np.flatnonzero(automatic & (partner == index))
     candidates = np.concatenate([left, midline])
-    chosen = spread(surface.points, candidates, count)
-    on_plane = partner[chosen] == chosen
-    return AutomaticPairs(*vertex_points(chosen[~on_plane]), *vertex_points(partner[chosen[~on_plane]]),
-                          chosen[on_plane], dataclasses.replace(search, twins_are="exact vertices",
-                                                                candidates=len(candidates), **growth,
-                                                                tessellation_mirror=tessellation,
-                                                                vertex_share=vertex_share))
+    search = dataclasses.replace(search, twins_are="exact vertices", candidates=len(candidates), **growth,
+                                 tessellation_mirror=tessellation, vertex_share=vertex_share)
+
+    def chosen(count: int) -> AutomaticPairs:
+        spread_out = spread(surface.points, candidates, count)
+        on_plane = partner[spread_out] == spread_out
+        return AutomaticPairs(*vertex_points(spread_out[~on_plane]), *vertex_points(partner[spread_out[~on_plane]]),
+                              spread_out[on_plane], search)
+    return FoundPairs(candidates, search, chosen)
 
 
 def _hold_landmarks(partner: np.ndarray, fixed: LandmarkPairs | None) -> None:

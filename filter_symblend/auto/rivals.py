@@ -23,7 +23,7 @@ import numpy as np
 from ..core.mirror_planes import best_plane_from
 from .config import AutoConfig
 from .maps import MirrorMap, plane_map
-from .twins import find_twins
+from .twins import covered_by
 
 SIGNIFICANCE = 2.0  # standard errors: a share further below the chosen one's is not "about as well"
 
@@ -39,7 +39,7 @@ class Rival:
 def _mirrored(mirror: MirrorMap, scored: np.ndarray, config: AutoConfig) -> np.ndarray:
     """(m,) bool: the ``scored`` vertices ``mirror`` mirrors within ``field_precision`` of the landing tolerance."""
     tolerance = config.field_precision * config.landing_tolerance * mirror.surface.diagonal
-    return find_twins(mirror, scored, tolerance).covered(tolerance)
+    return covered_by(mirror, scored, tolerance)
 
 
 def close_rivals(best: MirrorMap, candidates: list[MirrorMap], shares: dict[str, float], scored: np.ndarray,

@@ -38,7 +38,7 @@ from .first_map import coverage, first_map, intrinsic_mirror_map
 from .intrinsic_map import intrinsic_vertex_map
 from .intrinsic_start import cannot_start, intrinsic_start
 from .maps import MirrorMap, field_map, plane_map
-from .pairs import Constraints, as_landmarks, find_pairs, spread
+from .pairs import Constraints, FoundPairs, as_landmarks, search_pairs, spread
 from .report import AutomaticPairsReport, Round
 from .rivals import rival_warning
 from .surface import Outline, Surface, build_surface
@@ -272,9 +272,12 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
     given = (0, 0) if landmarks is None else (len(landmarks.left), len(landmarks.midline))  # the user's pairs, midline
     constraints = Constraints(surface, landmarks, forbidden, config)
 
-    def attempt(mirror: MirrorMap, pairs_wanted: int, start: float):
+    def attempt(mirror: MirrorMap, pairs_wanted: int, start: float, found: FoundPairs | None = None):
+        """The solve of ``pairs_wanted`` pairs under ``mirror`` (``found``: its search, if made before), its
+        round's entry and the search."""
         nonlocal exact_twins
-        pairs = find_pairs(mirror, sample, pairs_wanted, constraints, exact_twins)
+        found = search_pairs(mirror, sample, constraints, exact_twins) if found is None else found
+        pairs = found.chosen(pairs_wanted)
         exact_twins = pairs.search.twins_are == "exact vertices"
         solved, checked = as_landmarks(points, pairs, landmarks, options["landmark_priority"], config.coincident)
         candidate, solve_options = _solve_widening(solved, checked, core, scaled_progress(progress, start, step),
@@ -284,14 +287,14 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
                       pairs=int(len(checked.left) - given[0]), midline=int(len(checked.midline) - given[1]),
                       raised_widths={width: solve_options[width] for width in ("phi_width", "theta_width")
                                      if solve_options[width] != core[width]})
-        return candidate, entry
+        return candidate, entry, found
 
-    stopped, source = "round limit", mirror
+    stopped, source, source_found = "round limit", mirror, None
     for index in range(rounds_allowed):
         begin = 30.0 + index * step
         if progress is not None:
             progress(begin, f"automatic pairs, round {index + 1}")
-        candidate, entry = attempt(mirror, round_count, begin)
+        candidate, entry, found = attempt(mirror, round_count, begin)
         previous = points if result is None else result.points  # round 1 of 'auto': against the input itself
         entry = dataclasses.replace(entry, change=float(np.abs(candidate.points - previous).max() / surface.diagonal))
         if entry.surface_asymmetry > best * (1.0 + 1e-9):
@@ -300,7 +303,7 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
             break
         history.append(entry)
         gain = 1.0 - entry.surface_asymmetry / best if np.isfinite(best) and best > 0 else 1.0
-        result, best, source = candidate, entry.surface_asymmetry, mirror
+        result, best, source, source_found = candidate, entry.surface_asymmetry, mirror, found
         if entry.change < CONVERGED_CHANGE:
             stopped = "converged"
             break
@@ -315,7 +318,7 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
         # The rounds found the twins with fewer pairs; the output is solved with all of them.
         if progress is not None:
             progress(30.0 + rounds_allowed * step, f"automatic pairs: the solve with {count} pairs")
-        candidate, entry = attempt(source, count, 30.0 + rounds_allowed * step)
+        candidate, entry, _ = attempt(source, count, 30.0 + rounds_allowed * step, source_found)
         better = entry.surface_asymmetry <= best * (1.0 + 1e-9)  # as a round: one less symmetric is not kept
         history.append(dataclasses.replace(entry, final=True, kept=better))
         if better:

@@ -70,20 +70,51 @@ def find_twins(mirror: MirrorMap, sources: np.ndarray, tolerance: float) -> Twin
     (on a fine scan the map's own inconsistency is the scan's asymmetry, not the vertex spacing)."""
     surface = mirror.surface
     positions = surface.points[sources]
-    if surface.is_mesh:
-        predicted, carried = mirror.twins_and_normals(positions, surface.normals[sources])
-    else:
-        predicted = mirror.predict(positions)
-    point, landing, twin_normal, corners, weights = surface.nearest_points(predicted)
-    returned = mirror.predict(point)
-    back, _, _ = surface.nearest_vertices(returned)  # (a vertex: the round trip's own error is small)
-    round_trip = np.linalg.norm(surface.points[back] - positions, axis=1)
-    facing = np.isfinite(predicted).all(axis=1)
-    if surface.is_mesh:
-        facing &= np.einsum("ni,ni->n", carried, twin_normal) > 0
-    sound = facing & (round_trip <= np.maximum(surface.local_spacing[sources], tolerance))
-    vertex, vertex_distance, ratio = surface.nearest_vertices(predicted)
+    landed = _Landed.of(mirror, sources, tolerance)
+    vertex, vertex_distance, ratio = surface.nearest_vertices(landed.predicted)
     returning, _, _ = surface.nearest_vertices(mirror.predict(surface.points[vertex]))
-    side = np.where((positions - point) @ mirror.normal >= 0, 1, -1).astype(np.int8)
-    return Twins(sources, point, landing, corners, weights, vertex, vertex_distance, ratio,
-                 surface.local_spacing[vertex], returning == sources, returned, facing, sound, side)
+    side = np.where((positions - landed.point) @ mirror.normal >= 0, 1, -1).astype(np.int8)
+    return Twins(sources, landed.point, landed.landing, landed.corners, landed.weights, vertex, vertex_distance,
+                 ratio, surface.local_spacing[vertex], returning == sources, landed.returned, landed.facing,
+                 landed.sound, side)
+
+
+def covered_by(mirror: MirrorMap, sources: np.ndarray, tolerance: float) -> np.ndarray:
+    """(m,) bool: ``Twins.covered(tolerance)`` of :func:`find_twins` ``(mirror, sources, tolerance)``, without
+    the nearest vertices it does not need (a third of the work: each candidate map is scored by it)."""
+    landed = _Landed.of(mirror, sources, tolerance)
+    return landed.sound & (landed.landing <= tolerance)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Landed:
+    """Where the twins of the sources (m,) land: the map's ``predicted`` (m, 3), the nearest surface ``point``
+    (m, 3) at ``landing`` (m,), on ``corners`` with ``weights`` (m, 3); where the map sends that point back
+    (``returned``); ``facing`` and ``sound`` as in :class:`Twins`."""
+
+    predicted: np.ndarray
+    point: np.ndarray
+    landing: np.ndarray
+    corners: np.ndarray
+    weights: np.ndarray
+    returned: np.ndarray
+    facing: np.ndarray
+    sound: np.ndarray
+
+    @classmethod
+    def of(cls, mirror: MirrorMap, sources: np.ndarray, tolerance: float) -> "_Landed":
+        surface = mirror.surface
+        positions = surface.points[sources]
+        if surface.is_mesh:
+            predicted, carried = mirror.twins_and_normals(positions, surface.normals[sources])
+        else:
+            predicted = mirror.predict(positions)
+        point, landing, twin_normal, corners, weights = surface.nearest_points(predicted)
+        returned = mirror.predict(point)
+        back, _, _ = surface.nearest_vertices(returned)  # (a vertex: the round trip's own error is small)
+        round_trip = np.linalg.norm(surface.points[back] - positions, axis=1)
+        facing = np.isfinite(predicted).all(axis=1)
+        if surface.is_mesh:
+            facing &= np.einsum("ni,ni->n", carried, twin_normal) > 0
+        sound = facing & (round_trip <= np.maximum(surface.local_spacing[sources], tolerance))
+        return cls(predicted, point, landing, corners, weights, returned, facing, sound)
