@@ -24,7 +24,8 @@ candidates, in order:
    if it mirrors at least as much), and the tessellation's own mirror grown from the best map's twins.
 
 The intrinsic mirror is a candidate of every shape no plane mirrors, even when a field suffices before it
-(it is computed anyway: its opinion on each twin is kept, :func:`.confidence.mirror_pairs`). A registered
+(it is computed anyway: its opinion on each twin is kept, :func:`.confidence.mirror_pairs`), in a thread beside
+the fields from the moment no plane suffices. A registered
 field that mirrors ``min_coverage`` must also do so within ``field_precision`` of the tolerance, unless a plain
 map mirrors that much (a field fitted onto any surface lands much of it somewhere: 80 % of a bunny).
 """
@@ -37,6 +38,7 @@ import numpy as np
 
 from ..core.mesh_graph import one_pair_per_vertex
 from ..core.mirror_planes import surface_mirror_planes
+from ..core.parallel import Beside
 from ..errors import SymmetryNotFoundError
 from .config import AutoConfig
 from .connectivity import tessellation_mirror
@@ -140,6 +142,28 @@ class _Search:
         self.rigid: list[MirrorMap] = []  # the plain maps: planes and the whitened plane
         self.fields: dict[str, MirrorField] = {}  # the registered candidates' fields, by name
         self.intrinsic: MirrorMap | None = None
+        self._intrinsic: Beside | None = None  # the intrinsic mirror, being computed
+
+    def begin_intrinsic(self, surface: Surface, normal: np.ndarray) -> None:
+        """Start computing the intrinsic mirror (:func:`intrinsic_mirror_map`) in a thread beside the other
+        candidates: its spectrum and ZoomOut take a third of a posed body's search."""
+        self._intrinsic = Beside(lambda: intrinsic_mirror_map(surface, normal, self.config))
+
+    @property
+    def intrinsic_pending(self) -> bool:
+        """Whether the intrinsic mirror was begun and not yet taken."""
+        return self._intrinsic is not None
+
+    def take_intrinsic(self) -> MirrorMap | None:
+        """The intrinsic mirror begun, once computed (None if there is none: a point cloud, no spectrum)."""
+        if self._intrinsic is not None:
+            self.intrinsic, self._intrinsic = self._intrinsic.result(), None
+        return self.intrinsic
+
+    def close(self) -> None:
+        """Wait for the intrinsic mirror if it is still being computed (the search ended by an error)."""
+        if self._intrinsic is not None:
+            self._intrinsic.close()
 
     def score(self, mirror: MirrorMap) -> None:
         """Score ``mirror``; a map named as one tried before (a finer registration of it) takes its place only
@@ -180,6 +204,7 @@ def _candidates(surface: Surface, planes: list, search: _Search, config: AutoCon
     if mirrored is not None:  # the tessellation mirrors itself: its own mirror, exact whatever the bend
         yield [mirrored]
         return
+    search.begin_intrinsic(surface, ranked[0].normal)  # no plane suffices: a candidate, and an opinion on each twin
     screening = _strided(surface, config.screening_samples)
     x = surface.points[screening]
     coarse = config.field_widths[0] * surface.diagonal
@@ -197,7 +222,7 @@ def _candidates(surface: Surface, planes: list, search: _Search, config: AutoCon
     for mirror in ranked:
         yield registered(mirror.name, mirror.predict(x))
     yield registered(f"drift from the {ranked[0].name}", _drift_predictions(ranked[0], x))
-    intrinsic = search.intrinsic = intrinsic_mirror_map(surface, ranked[0].normal, config)
+    intrinsic = search.take_intrinsic()
     if intrinsic is not None:
         yield [intrinsic]
         yield registered(intrinsic.name, intrinsic.predict(x))
@@ -205,20 +230,23 @@ def _candidates(surface: Surface, planes: list, search: _Search, config: AutoCon
         yield registered(f"drift from the {mirror.name}", _drift_predictions(mirror, x))
 
 
-def _refined(surface: Surface, search: _Search, config: AutoConfig, progress) -> None:
-    """The search's last candidates: its best registered field registered again on more vertices with finer
-    fields (it takes the coarse one's place if it mirrors at least as much), then the tessellation's own mirror
-    grown from the best map's twins (exact, if the tessellation mirrors itself; already tried from the plain
-    maps)."""
+def _refined_field(surface: Surface, search: _Search, config: AutoConfig, progress) -> None:
+    """The search's best registered field registered again on more vertices with finer fields: it takes the
+    coarse one's place if it mirrors at least as much."""
     if search.fields:
         name = max(search.fields, key=lambda field: search.shares[field])
         if progress is not None:
             progress(60.0, f"{name}, on {config.registration_samples} vertices")
         sample = _strided(surface, config.registration_samples)
         search.score(field_map(surface, registered_field(surface, sample, search.fields[name], config), name))
+
+
+def _tessellation_of_best(search: _Search, config: AutoConfig) -> None:
+    """The search's last candidate: the tessellation's own mirror grown from the best map's twins (exact, if the
+    tessellation mirrors itself; already tried from the plain maps)."""
     best = search.best
     if best.name not in {TESSELLATION, *(mirror.name for mirror in search.rigid)}:
-        mirrored = tessellation_map(surface, [best], search.scored, config)
+        mirrored = tessellation_map(best.surface, [best], search.scored, config)
         if mirrored is not None:
             search.score(mirrored)
 
@@ -228,20 +256,21 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress
     the surface. ``scored`` (m,): the vertices the shares are measured on."""
     planes = surface_mirror_planes(surface.points[surface.usable_index])
     search = _Search(scored, config)
-    for batch in _candidates(surface, planes, search, config, progress):
-        for mirror in batch:
-            search.score(mirror)
-        if search.suffices:
-            break
-    rigid = max(search.rigid, key=lambda mirror: search.shares[mirror.name])
-    rigid_share = search.shares[rigid.name]
-    if search.intrinsic is None and rigid_share < config.plane_suffices and search.best.name != TESSELLATION:
-        # A shape no plane mirrors (a bend, a pose): the intrinsic mirror is always a candidate, and its opinion
-        # on each twin is kept (:func:`.confidence.mirror_pairs`).
-        search.intrinsic = intrinsic_mirror_map(surface, rigid.normal, config)
-        if search.intrinsic is not None:
-            search.score(search.intrinsic)
-    _refined(surface, search, config, progress)
+    try:
+        for batch in _candidates(surface, planes, search, config, progress):
+            for mirror in batch:
+                search.score(mirror)
+            if search.suffices:
+                break
+        _refined_field(surface, search, config, progress)
+        if search.intrinsic_pending:  # a field sufficed first: the intrinsic mirror is still a candidate
+            intrinsic = search.take_intrinsic()
+            if intrinsic is not None:
+                search.score(intrinsic)
+    finally:
+        search.close()
+    _tessellation_of_best(search, config)
+    rigid_share = max(search.shares[mirror.name] for mirror in search.rigid)
     best = search.best
     # A plain map that mirrors min_coverage shows a symmetry up to the scan's noise; else the field must
     # prove it within its own precision.

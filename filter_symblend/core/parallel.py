@@ -43,6 +43,32 @@ def side_by_side(first: Callable, second: Callable):
         pool.shutdown(wait=True, cancel_futures=True)
 
 
+class Beside:
+    """``task()`` started in a thread beside the caller's own work, BLAS held to one thread (threadpoolctl) until
+    the result is taken or ``close`` is called, so the two do not oversubscribe the cores and nested
+    ``in_threads`` calls in either thread save and restore that same one thread. Measured on 2 cores: the
+    intrinsic mirror beside a posed body's other candidates, its first map 0.2-1.0 s faster (of 5-7 s)."""
+
+    def __init__(self, task: Callable):
+        self._limits = threadpool_limits(limits=1, user_api="blas")
+        self._pool = ThreadPoolExecutor(1)
+        self._future = self._pool.submit(task)
+
+    def result(self):
+        """The task's result (its exception raised here), once it is done; BLAS restored."""
+        try:
+            return self._future.result()
+        finally:
+            self.close()
+
+    def close(self) -> None:
+        """Wait for the task (its result kept for ``result``), restore BLAS."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+            self._limits.restore_original_limits()
+            self._pool = None
+
+
 def row_blocks(matrix: sp.csr_matrix) -> Callable[[np.ndarray], np.ndarray]:
     """``v -> matrix @ v`` with the rows cut into one block of equal nonzeros per core. Measured
     on 2 cores: 1.9x faster on a random 10^5 x 10^5 matrix with 295 nonzeros per row, but only
