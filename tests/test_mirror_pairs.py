@@ -2,6 +2,7 @@
 remeshed so that no vertex has an exact twin and deformed by a known map; and a confidence that finds the
 twins a map gets wrong."""
 
+import pathlib
 import re
 
 import numpy as np
@@ -392,3 +393,21 @@ def test_the_map_of_a_tosca_man_is_the_published_self_symmetry():
     errors = twin_errors(twin, points, a, b, np.sqrt(surface_area(points, faces)))
     assert np.mean(errors <= 0.05) > 0.98
     assert pairs.report.confident_share > 0.95
+
+
+def test_the_benchmarks_landmark_run_takes_distinct_true_twin_pairs_apart_and_times_them(cow, monkeypatch):
+    # the yardstick of the automatic pairs' time (issue 47): pairs from given twins, confident ones first
+    import sys
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "scripts"))
+    from benchmarks import mirror_maps
+    taken = {}
+    monkeypatch.setattr(mirror_maps, "symmetrize", lambda points, left, right, **options: taken.update(
+        left=left, right=right, options=options))
+    confidence = np.where(np.arange(len(cow.points)) % 2 == 0, 1.0, 0.0)
+    count, seconds = mirror_maps.landmark_seconds(cow.points, cow.points[cow.partner], confidence, "standard", 300)
+    left, right = taken["left"], taken["right"]
+    assert count == len(left) == 300 and seconds >= 0 and taken["options"]["mode"] == "standard"
+    np.testing.assert_array_equal(cow.points[cow.partner[left]], cow.points[right])  # the twins (or their copies)
+    assert len(np.unique(cow.points[np.concatenate([left, right])], axis=0)) == 600
+    assert (np.linalg.norm(cow.points[left] - cow.points[right], axis=1) > 0.02 * cow.diagonal).all()
+    assert (confidence[left] == 1.0).all()  # enough confident twins: only those
