@@ -50,6 +50,9 @@ def test_an_exactly_symmetric_mesh_in_any_pose_comes_back_unchanged(blob):
         assert angle < 0.1
         auto = result.report.auto_pairs
         assert auto.twins_are == "exact vertices" and auto.midline_count > 0
+        # its first map pairs every vertex: one round, with every pair at once (more than round_pairs)
+        assert len(auto.rounds) == 1 and not auto.rounds[0].final
+        assert auto.rounds[0].pairs == auto.pair_count > AutoConfig().round_pairs
 
 
 def test_a_plane_gives_an_exactly_symmetric_mesh_its_exact_mirror_vertices(blob):

@@ -73,7 +73,8 @@ class AutoConfig:
     round_pairs: int = _field(
         1000, "pairs",
         "pairs of each round but the last: the rounds only have to find the twins, and the warp's cost grows "
-        "with the cube of the pairs; the last solve takes auto_pair_count")
+        "with the cube of the pairs; the last solve takes auto_pair_count, and so does a round whose map pairs "
+        "plane_suffices of the sample (it is the last)")
     least_gain: float = _field(
         0.05, "share of the output's mirror asymmetry",
         "a round that makes the output less than 5 % more mirror-symmetric than the round before is the "

@@ -9,8 +9,10 @@ user's landmarks, on the input. Where the map left part of the surface without t
 compression, a shape only partly mirrored by the first map), the output is more symmetric than the
 input, so the next map is a field registered on the output, from its own plane, and pairs more of it.
 The rounds stop when the map pairs ``plane_suffices`` of the sample, when the output no longer moves,
-or when a round leaves it less mirror-symmetric than the one before (that round is not kept). The last
-solve takes ``auto_pair_count`` pairs from the best round's map, and is kept by the same rule. Every result
+or when a round leaves it less mirror-symmetric than the one before (that round is not kept). A round
+whose map pairs ``plane_suffices`` of the sample is the last and takes ``auto_pair_count`` pairs at once;
+otherwise the last solve takes them from the best round's map (its pair search, made once), and is kept by
+the same rule. Every result
 carries that map: each vertex's twin with a confidence (:mod:`.confidence`). In ``mode='articulated'``,
 rounds from a map of space that leave a part of the output far from its mirror image (a limb no smooth map
 followed) are run again from the intrinsic start, and the more mirror-symmetric output is kept.
@@ -289,12 +291,15 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
                                      if solve_options[width] != core[width]})
         return candidate, entry, found
 
-    stopped, source, source_found = "round limit", mirror, None
+    stopped, source, source_found, solved_with = "round limit", mirror, None, 0
     for index in range(rounds_allowed):
         begin = 30.0 + index * step
         if progress is not None:
             progress(begin, f"automatic pairs, round {index + 1}")
-        candidate, entry, found = attempt(mirror, round_count, begin)
+        found = search_pairs(mirror, sample, constraints, exact_twins)
+        # A round whose map pairs plane_suffices of the sample is the last one kept: it takes all the pairs.
+        wanted = count if found.search.share_paired >= config.plane_suffices else round_count
+        candidate, entry, found = attempt(mirror, wanted, begin, found)
         previous = points if result is None else result.points  # round 1 of 'auto': against the input itself
         entry = dataclasses.replace(entry, change=float(np.abs(candidate.points - previous).max() / surface.diagonal))
         if entry.surface_asymmetry > best * (1.0 + 1e-9):
@@ -303,7 +308,7 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
             break
         history.append(entry)
         gain = 1.0 - entry.surface_asymmetry / best if np.isfinite(best) and best > 0 else 1.0
-        result, best, source, source_found = candidate, entry.surface_asymmetry, mirror, found
+        result, best, source, source_found, solved_with = candidate, entry.surface_asymmetry, mirror, found, wanted
         if entry.change < CONVERGED_CHANGE:
             stopped = "converged"
             break
@@ -314,7 +319,7 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
             stopped = "little gain"
             break
         mirror = _output_map(surface, result, registration, config)
-    if count > round_count and history[-1].search.candidates > round_count:
+    if count > solved_with and history[-1].search.candidates > round_count:
         # The rounds found the twins with fewer pairs; the output is solved with all of them.
         if progress is not None:
             progress(30.0 + rounds_allowed * step, f"automatic pairs: the solve with {count} pairs")
