@@ -25,9 +25,9 @@ candidates, in order:
 
 The intrinsic mirror is a candidate of every shape no plane mirrors, even when a field suffices before it
 (it is computed anyway: its opinion on each twin is kept, :func:`.confidence.mirror_pairs`), in a thread beside
-the fields from the moment no plane suffices. A registered
-field that mirrors ``min_coverage`` must also do so within ``field_precision`` of the tolerance, unless a plain
-map mirrors that much (a field fitted onto any surface lands much of it somewhere: 80 % of a bunny).
+the fields from the moment no plane suffices. A registered field that mirrors ``min_coverage`` must also do so
+within ``field_precision`` of the tolerance, unless a plain map mirrors that much (a field fitted onto any
+surface lands much of it somewhere: 80 % of a bunny).
 """
 
 from __future__ import annotations

@@ -78,11 +78,10 @@ def spread(points: np.ndarray, vertices: np.ndarray, count: int) -> np.ndarray:
 
 @dataclasses.dataclass(frozen=True)
 class FoundPairs:
-    """Every pair one search under a map found (``candidates`` (k,): the vertices that may pair; ``search``: what
-    the round reports), before ``count`` of them are spread over the surface (:meth:`chosen`): the rounds take
-    1,000 of them, the last solve ``auto_pair_count`` from the same search."""
+    """Every pair one search under a map found (``search``: what the round reports), before ``count`` of them
+    are spread over the surface (:meth:`chosen`): a round takes ``round_pairs`` of them (``auto_pair_count`` if
+    it is the last), the last solve ``auto_pair_count`` from the kept round's search."""
 
-    candidates: np.ndarray
     search: PairSearch
     _chosen: Callable[[int], AutomaticPairs]
 
@@ -124,7 +123,7 @@ def search_pairs(mirror: MirrorMap, sources: np.ndarray, constraints: Constraint
         rows = np.searchsorted(sources, spread(surface.points, candidates, count))
         return AutomaticPairs(*_point_pairs(surface, sources, twins, rows), search)
     search = dataclasses.replace(search, twins_are="points of the surface", candidates=len(candidates))
-    return FoundPairs(candidates, search, chosen)
+    return FoundPairs(search, chosen)
 
 
 def _point_pairs(surface: Surface, sources: np.ndarray, twins, rows: np.ndarray):
@@ -185,9 +184,10 @@ def _exact_pairs(mirror: MirrorMap, sources: np.ndarray, twins, exact_twins: np.
     def chosen(count: int) -> AutomaticPairs:
         spread_out = spread(surface.points, candidates, count)
         on_plane = partner[spread_out] == spread_out
-        return AutomaticPairs(*vertex_points(spread_out[~on_plane]), *vertex_points(partner[spread_out[~on_plane]]),
-                              spread_out[on_plane], search)
-    return FoundPairs(candidates, search, chosen)
+        off_plane = spread_out[~on_plane]
+        return AutomaticPairs(*vertex_points(off_plane), *vertex_points(partner[off_plane]), spread_out[on_plane],
+                              search)
+    return FoundPairs(search, chosen)
 
 
 def _hold_landmarks(partner: np.ndarray, fixed: LandmarkPairs | None) -> None:

@@ -297,7 +297,7 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
         if progress is not None:
             progress(begin, f"automatic pairs, round {index + 1}")
         found = search_pairs(mirror, sample, constraints, exact_twins)
-        # A round whose map pairs plane_suffices of the sample is the last one kept: it takes all the pairs.
+        # A round whose map pairs plane_suffices of the sample is the last: it takes all the pairs at once.
         wanted = count if found.search.share_paired >= config.plane_suffices else round_count
         candidate, entry, found = attempt(mirror, wanted, begin, found)
         previous = points if result is None else result.points  # round 1 of 'auto': against the input itself
