@@ -118,11 +118,11 @@ def search_pairs(mirror: MirrorMap, sources: np.ndarray, constraints: Constraint
         if exact or found.search.vertex_share >= config.vertex_share:
             return found
     candidates = sources[covered & ~forbidden[sources]]
+    search = dataclasses.replace(search, twins_are="points of the surface", candidates=len(candidates))
 
     def chosen(count: int) -> AutomaticPairs:
         rows = np.searchsorted(sources, spread(surface.points, candidates, count))
         return AutomaticPairs(*_point_pairs(surface, sources, twins, rows), search)
-    search = dataclasses.replace(search, twins_are="points of the surface", candidates=len(candidates))
     return FoundPairs(search, chosen)
 
 

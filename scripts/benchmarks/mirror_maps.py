@@ -55,6 +55,7 @@ CHECKED = {"FAUST": ["tr_reg_005", "tr_reg_017", "tr_reg_030", "tr_reg_048", "tr
            "TOSCA": ["cat1", "cat2", "centaur1", "centaur3", "david1", "david6", "dog2", "dog7", "horse6", "michael3",
                      "victoria2", "victoria7"]}
 QUICK = {"FAUST": ["tr_reg_000", "tr_reg_055"], "TOSCA": ["cat4", "horse5", "michael8", "wolf2"]}
+WIDENINGS = 7  # times the landmark run's widths may widen (a stray twin or a tip among the 2,000 pairs)
 LANDMARK_RUN = 2000  # pairs of the landmark run the automatic pairs' time is set against (issue 47: <= 10x)
 WRONG = 0.05  # a twin this far from the true one (x sqrt(area)) is wrong (the issue's measure)
 
@@ -146,14 +147,7 @@ def landmark_output(points: np.ndarray, a: np.ndarray, b: np.ndarray, mode: str,
     mutual), each pair's left landmark on the same side."""
     diagonal = np.linalg.norm(np.ptp(points, axis=0))
     apart = np.flatnonzero((a != b) & (np.linalg.norm(points[a] - points[b], axis=1) > 0.02 * diagonal))
-    used, chosen = set(), []
-    for row in apart[farthest_point_order(points[a[apart]], len(apart))]:
-        if a[row] not in used and b[row] not in used:
-            used.update((a[row], b[row]))
-            chosen.append(row)
-            if len(chosen) == count:
-                break
-    chosen = np.array(chosen)
+    chosen = _distinct(apart[farthest_point_order(points[a[apart]], len(apart))], a, b, count)
     left, right = a[chosen], b[chosen]
     gaps = points[left] - points[right]  # each pair from the same side: along the principal direction of the gaps
     swap = gaps @ np.linalg.eigh(gaps.T @ gaps)[1][:, -1] < 0
@@ -177,25 +171,33 @@ def landmark_seconds(points: np.ndarray, twin: np.ndarray, confidence: np.ndarra
     left = left[np.linalg.norm(points[left] - points[partner[left]], axis=1) > 0.02 * diagonal]
     sure = confidence[left] >= CONFIDENT
     order = [part[farthest_point_order(points[part], len(part))] for part in (left[sure], left[~sure])]
-    used, chosen = set(), []
-    for vertex in np.concatenate(order):  # the confident first, each set spread; no vertex in two pairs
-        if vertex not in used and partner[vertex] not in used:
-            used.update((vertex, partner[vertex]))
-            chosen.append(vertex)
-            if len(chosen) == count:
-                break
-    left = np.array(chosen)
+    left = _distinct(np.concatenate(order), np.arange(len(points)), partner, count)  # the confident first
     widths = {"phi_width": DEFAULTS["phi_width"], "theta_width": DEFAULTS["theta_width"]}
-    for _ in range(8):  # a tip or a stray twin: the widths widened as the automatic pairs' rounds widen them
+    for widening in range(WIDENINGS + 1):  # a tip or a stray twin: the widths widened as the rounds widen them
         start = time.perf_counter()
         try:
             quiet(symmetrize, points, left, partner[left], mode=mode, **widths)
             return len(left), time.perf_counter() - start
-        except DisconnectedPairsError as error:
-            widths["phi_width"] = error.connecting_width
-        except DegenerateNeighbourhoodError:
-            widths["theta_width"] *= 2.0
-    return len(left), float("nan")
+        except (DisconnectedPairsError, DegenerateNeighbourhoodError) as error:
+            if widening == WIDENINGS:
+                raise
+            if isinstance(error, DisconnectedPairsError):
+                widths["phi_width"] = error.connecting_width
+            else:
+                widths["theta_width"] *= 2.0
+
+
+def _distinct(rows: np.ndarray, a: np.ndarray, b: np.ndarray, count: int) -> np.ndarray:
+    """The first ``count`` of ``rows`` (in their order) whose pair ``a[row]``, ``b[row]`` shares no vertex with
+    a pair taken before."""
+    used, chosen = set(), []
+    for row in rows:
+        if a[row] not in used and b[row] not in used:
+            used.update((a[row], b[row]))
+            chosen.append(row)
+            if len(chosen) == count:
+                break
+    return np.array(chosen, dtype=np.int64)
 
 
 def summary(errors: np.ndarray) -> str:
