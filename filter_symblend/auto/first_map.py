@@ -19,7 +19,9 @@ candidates, in order:
    (:mod:`.registration`: a strong bend with a compression, which ICP from a plane does not reach); then the
    shape's intrinsic mirror itself (:mod:`.intrinsic_map`: its denoised vertex pairs and the local maps
    between them, which follow a swung limb where no smooth field does) and a field from it; a field from the
-   drift of the second plane.
+   drift of the second plane; where the shape may be compressed (not a posed body) and the whitened plane mirrors
+   more than any plane, the intrinsic mirror of the whitened shape (a compression oblique to the mirror breaks
+   the symmetry of surface distances, whitening restores it) and a field from it.
 4. Last, the best field registered again on more vertices with finer fields (it takes the coarse one's place
    if it mirrors at least as much), and the tessellation's own mirror grown from the best map's twins.
 
@@ -44,7 +46,7 @@ from .config import AutoConfig
 from .connectivity import tessellation_mirror
 from .field import MirrorField, field_centres, refitted, register, robust_fit, robust_tolerance
 from .intrinsic_map import intrinsic_pairs
-from .maps import MirrorMap, affine_map, field_map, pairs_map, plane_map, point_pairs_map
+from .maps import WHITENED_PLANE, MirrorMap, affine_map, field_map, pairs_map, plane_map, point_pairs_map
 from .registration import MIN_DEVIATION, POOL, SAMPLES, coherent_point_drift, registration_sample
 from .rivals import Rival, close_rivals
 from .surface import Outline, Surface
@@ -89,13 +91,19 @@ def tessellation_map(surface: Surface, maps: list[MirrorMap], sources: np.ndarra
     return None
 
 
-def intrinsic_mirror_map(surface: Surface, normal: np.ndarray, config: AutoConfig) -> MirrorMap | None:
-    """The intrinsic mirror's sound pairs as a map (:mod:`.intrinsic_map`), the left side along ``normal``;
-    None for a point cloud, a mesh without a spectrum, or too few pairs to start a field."""
-    pairs = intrinsic_pairs(surface, config)
+INTRINSIC = "intrinsic mirror"  # the name of the intrinsic mirror's map; of the whitened shape's: WHITENED_INTRINSIC
+WHITENED_INTRINSIC = "intrinsic mirror of the whitened shape"
+
+
+def intrinsic_mirror_map(surface: Surface, normal: np.ndarray, config: AutoConfig,
+                         whitened: bool = False) -> MirrorMap | None:
+    """The intrinsic mirror's sound pairs as a map (:mod:`.intrinsic_map`; ``whitened``: the whitened shape's
+    mirror), the left side along ``normal``; None for a point cloud, a mesh without a spectrum, or too few pairs
+    to start a field."""
+    pairs = intrinsic_pairs(surface, config, whitened)
     if pairs is None or len(pairs[0]) < config.screening_centres:
         return None
-    return point_pairs_map(surface, *pairs, normal, config, "intrinsic mirror")
+    return point_pairs_map(surface, *pairs, normal, config, WHITENED_INTRINSIC if whitened else INTRINSIC)
 
 
 def _drift_predictions(start: MirrorMap, x: np.ndarray) -> np.ndarray:
@@ -141,8 +149,8 @@ class _Search:
         self.shares: dict[str, float] = {}
         self.rigid: list[MirrorMap] = []  # the plain maps: planes and the whitened plane
         self.fields: dict[str, MirrorField] = {}  # the registered candidates' fields, by name
-        self.intrinsic: MirrorMap | None = None
-        self._intrinsic: Beside | None = None  # the intrinsic mirror, being computed
+        self.intrinsics: list[MirrorMap] = []  # the intrinsic mirrors, once taken
+        self._intrinsic: Beside | None = None  # the intrinsic mirrors, being computed
 
     def begin_intrinsic(self, surface: Surface, normal: np.ndarray) -> None:
         """Start computing the intrinsic mirror (:func:`intrinsic_mirror_map`) in a thread beside the other
@@ -156,9 +164,18 @@ class _Search:
 
     def take_intrinsic(self) -> MirrorMap | None:
         """The intrinsic mirror begun, once computed (None if there is none: a point cloud, no spectrum)."""
-        if self._intrinsic is not None:
-            self.intrinsic, self._intrinsic = self._intrinsic.result(), None
-        return self.intrinsic
+        if self._intrinsic is None:
+            return None
+        intrinsic, self._intrinsic = self._intrinsic.result(), None
+        if intrinsic is not None:
+            self.intrinsics.append(intrinsic)
+        return intrinsic
+
+    @property
+    def intrinsic(self) -> MirrorMap | None:
+        """The intrinsic mirror taken that mirrors the most (None if none was taken and scored)."""
+        scored = [mirror for mirror in self.intrinsics if mirror.name in self.shares]
+        return max(scored, key=lambda mirror: self.shares[mirror.name], default=None)
 
     def close(self) -> None:
         """Wait for the intrinsic mirror if it is still being computed (the search ended by an error)."""
@@ -190,9 +207,9 @@ class _Search:
         return self.shares[self.best.name] >= enough
 
 
-def _candidates(surface: Surface, planes: list, search: _Search, config: AutoConfig, progress):
+def _candidates(surface: Surface, planes: list, search: _Search, config: AutoConfig, compression: bool, progress):
     """Batches of candidate maps, cheapest first (see the module doc); each batch is scored before the next is
-    made, which may read the shares so far."""
+    made, which may read the shares so far. ``compression``: see :func:`first_map`."""
     rigid = [plane_map(surface, *plane, name="mirror plane" if rank == 1 else f"mirror plane {rank}")
              for rank, plane in enumerate(planes[:3], 1)]
     if not isinstance(surface, Outline):  # a flat shape's mirrors are lines of its plane: the planes find them
@@ -228,6 +245,12 @@ def _candidates(surface: Surface, planes: list, search: _Search, config: AutoCon
         yield registered(intrinsic.name, intrinsic.predict(x))
     for mirror in ranked[1:2]:
         yield registered(f"drift from the {mirror.name}", _drift_predictions(mirror, x))
+    if compression and ranked[0].name == WHITENED_PLANE:  # a compression of the whole breaks the intrinsic symmetry
+        whitened = intrinsic_mirror_map(surface, ranked[0].normal, config, whitened=True)
+        if whitened is not None:
+            search.intrinsics.append(whitened)
+            yield [whitened]
+            yield registered(whitened.name, whitened.predict(x))
 
 
 def _refined_field(surface: Surface, search: _Search, config: AutoConfig, progress) -> None:
@@ -251,13 +274,16 @@ def _tessellation_of_best(search: _Search, config: AutoConfig) -> None:
             search.score(mirrored)
 
 
-def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, progress=None) -> FirstMap:
+def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, compression: bool = True,
+              progress=None) -> FirstMap:
     """The first mirror map (see the module doc); SymmetryNotFoundError when none mirrors ``min_coverage`` of
-    the surface. ``scored`` (m,): the vertices the shares are measured on."""
+    the surface. ``scored`` (m,): the vertices the shares are measured on; ``compression``: whether the shape may
+    be compressed as a whole (not a posed body, ``mode='articulated'``), so that the whitened shape's intrinsic
+    mirror is a candidate."""
     planes = surface_mirror_planes(surface.points[surface.usable_index])
     search = _Search(scored, config)
     try:
-        for batch in _candidates(surface, planes, search, config, progress):
+        for batch in _candidates(surface, planes, search, config, compression, progress):
             for mirror in batch:
                 search.score(mirror)
             if search.suffices:

@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..core.geometry import whitening
 from .config import AutoConfig
 from .field import tukey_weights
 from .growth import LOCAL_MAP_RIDGE, affine_mirror_maps
@@ -56,15 +57,28 @@ def robust_twins(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return affine_mirror_maps(x[neighbours], y[neighbours], weights, x, LOCAL_MAP_RIDGE)[0]
 
 
-def spectral_candidates(surface: Surface, config: AutoConfig) -> tuple[WorkingMesh | None,
-                                                                      list[CandidateMirror] | None]:
+def spectral_candidates(surface: Surface, config: AutoConfig, whitened: bool = False) -> tuple[
+        WorkingMesh | None, list[CandidateMirror] | None]:
     """The working mesh of ``surface`` (a mesh) and its candidate intrinsic mirrors, the best first
     (:func:`.spectral.candidate_mirrors`; None without a working mesh or a spectrum), computed once per surface
-    and ``config``: the first map and the intrinsic start both ask."""
+    and ``config``: the first map and the intrinsic start both ask. ``whitened``: the mirrors of the whitened
+    shape (its covariance the identity), whose intrinsic symmetry a compression of the whole does not break (the
+    mirror of an affine image of a symmetric shape is an isometry again once whitened, :func:`.maps.affine_map`);
+    the working mesh's points are then mapped back to the shape's space."""
     def compute():
-        mesh = working_mesh(surface.points, surface.faces[surface.triangles], surface.usable, config)
-        return mesh, None if mesh is None else candidate_mirrors(mesh, config)
-    return surface.memo(("intrinsic mirrors", config), compute)
+        points, back = surface.points, None
+        if whitened:
+            centre = surface.points[surface.usable_index].mean(axis=0)
+            forward = whitening(surface.points[surface.usable_index])
+            points, back = (surface.points - centre) @ forward, (np.linalg.pinv(forward), centre)
+        mesh = working_mesh(points, surface.faces[surface.triangles], surface.usable, config)
+        if mesh is None:
+            return None, None
+        candidates = candidate_mirrors(mesh, config)
+        if back is not None:
+            mesh = WorkingMesh(mesh.points @ back[0] + back[1], mesh.faces, mesh.vertex_of)
+        return mesh, candidates
+    return surface.memo(("intrinsic mirrors", config, whitened), compute)
 
 
 def input_vertices(surface: Surface, mesh: WorkingMesh) -> np.ndarray:
@@ -89,19 +103,20 @@ def intrinsic_vertex_map(surface: Surface, config: AutoConfig) -> np.ndarray | N
     return partner
 
 
-def intrinsic_pairs(surface: Surface, config: AutoConfig) -> tuple[np.ndarray, np.ndarray] | None:
+def intrinsic_pairs(surface: Surface, config: AutoConfig, whitened: bool = False) -> tuple[np.ndarray,
+                                                                                            np.ndarray] | None:
     """(positions (m, 3), twin positions (m, 3)) of the working mesh's vertices under the denoised intrinsic
     mirror (see the module doc), each pair once per direction; None for a point cloud or a mesh without a
     spectrum. Computed once per surface and ``config`` (the first map, the intrinsic start's rounds and the
-    second run of the rounds all ask)."""
+    second run of the rounds all ask); ``whitened``: of the whitened shape's mirror (:func:`spectral_candidates`)."""
     if not surface.is_mesh:
         return None
-    return surface.memo(("intrinsic pairs", config), lambda: _denoised_pairs(surface, config))
+    return surface.memo(("intrinsic pairs", config, whitened), lambda: _denoised_pairs(surface, config, whitened))
 
 
-def _denoised_pairs(surface: Surface, config: AutoConfig) -> tuple[np.ndarray, np.ndarray] | None:
+def _denoised_pairs(surface: Surface, config: AutoConfig, whitened: bool) -> tuple[np.ndarray, np.ndarray] | None:
     """:func:`intrinsic_pairs`, computed."""
-    mesh, candidates = spectral_candidates(surface, config)
+    mesh, candidates = spectral_candidates(surface, config, whitened)
     if not candidates:  # no working mesh, or no spectrum
         return None
     twin = candidates[0].vertex_map  # the one that mirrors the most of the surface

@@ -66,6 +66,9 @@ def plane_map(surface: Surface, normal: np.ndarray, offset: float, name: str = "
                      _linear_carry(reflection), MirrorPlane(normal, float(offset)))
 
 
+WHITENED_PLANE = "whitened mirror plane"  # the name of :func:`affine_map`'s map
+
+
 def affine_map(surface: Surface) -> MirrorMap:
     """The mirror plane of the whitened shape, mapped back: an affine involution. A mirror-symmetric shape
     under any affine map is symmetric under such a map, and whitened (covariance the identity), its
@@ -80,7 +83,7 @@ def affine_map(surface: Surface) -> MirrorMap:
         return reflection_across_plane((x - centre) @ forward, normal, offset) @ backward + centre
 
     linear = forward @ (np.eye(3) - 2.0 * np.outer(normal, normal)) @ backward  # x -> x @ linear
-    return MirrorMap("whitened mirror plane", surface, predict, normalize(backward @ normal), _linear_carry(linear.T))
+    return MirrorMap(WHITENED_PLANE, surface, predict, normalize(backward @ normal), _linear_carry(linear.T))
 
 
 def field_map(surface: Surface, field: MirrorField, name: str) -> MirrorMap:

@@ -240,6 +240,7 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
     if landmarks is None and start == "maps":
         try:
             mirror, shares, plane, rivals, intrinsic = first_map(surface, scored, config,
+                                                                 core["mode"] != "articulated",
                                                                  scaled_progress(progress, 0.0, 30.0))
             origin = {"coverage": shares, "surface_plane": plane}
             if rivals:
