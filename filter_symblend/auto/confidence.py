@@ -158,18 +158,22 @@ def _vertex_map_candidate(partner: np.ndarray, geometry: Surface, sources: np.nd
 
 def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, config: AutoConfig,
                  rivals: list[Rival] = (), second: MirrorMap | None = None,
-                 vertex_map: np.ndarray | None = None) -> MirrorPairs:
+                 vertex_map: np.ndarray | None = None, posed: bool = False) -> MirrorPairs:
     """The twins of every pairable vertex of ``geometry`` (the input surface; ``mirror`` may live on a
     symmetrized output of it) that ``mirror`` predicts one for, with confidence 0 where it does not support it
     (see the module doc), none on or toward a ``forbidden`` (N,) bool vertex;
     duplicates of a vertex take its twin. Other symmetries that fit about as well (``rivals``, maps on
     ``geometry``) lower the confidence where they put the twin elsewhere (:func:`.rivals.rival_agreement`).
-    A ``second`` map (the intrinsic mirror) gives the twin of each vertex where its own evidence is stronger:
-    the confidence chooses per vertex (a hand the chosen map of space lost, which the intrinsic mirror follows),
-    and where ``mirror`` gives none. (Where ``mirror`` was confident it stood, until both BCICP halves measured
-    the rule without that gate: 0.957 -> 0.958 and 0.919 -> 0.919 right twins, none fell.) A ``vertex_map`` (N,)
-    (the intrinsic mirror's own, :func:`.intrinsic_map.intrinsic_vertex_map`) is a third opinion, by the same
-    rule. The report's ``coverage`` and ``consistency`` count supported twins."""
+    A ``second`` map (the intrinsic mirror) gives the twin of each vertex where its own evidence is stronger (a
+    hand the chosen map of space lost, which the intrinsic mirror follows), and where ``mirror`` gives none; unless
+    the shape is ``posed`` (``mode='articulated'``), only where ``mirror``'s twin is not confident. A pose is an
+    isometry, the intrinsic mirror's model, and a field can land a swung limb consistently on the wrong place; a
+    bend or a compression is the map of space's, and there the intrinsic mirror's twins (right to a vertex or two,
+    off under a compression) replaced a registered field's finer twins with confident wrong ones (spot remeshed,
+    bent 1.2 rad: 59 % of the twins within 1 % of the diagonal, 20 % confident and off by 2 %, against 72 % and 6 %
+    where the field's confident twins stand; docs/benchmarks.md). A ``vertex_map`` (N,) (the intrinsic mirror's
+    own, :func:`.intrinsic_map.intrinsic_vertex_map`) is a third opinion, by the same rule. The report's
+    ``coverage`` and ``consistency`` count supported twins."""
     sources = np.flatnonzero(geometry.usable & ~forbidden)
     chosen = _candidate(mirror, geometry, sources, forbidden, config, rivals)
     name = mirror.name
@@ -180,7 +184,8 @@ def mirror_pairs(mirror: MirrorMap, geometry: Surface, forbidden: np.ndarray, co
         opinions.append(("intrinsic vertex map",
                          _vertex_map_candidate(vertex_map, geometry, sources, forbidden, config, rivals)))
     for other_name, other in opinions:
-        better = (other.confidence > chosen.confidence) | (~chosen.listed & other.listed)
+        stronger = (other.confidence > chosen.confidence) & (posed | (chosen.confidence < CONFIDENT))
+        better = stronger | (~chosen.listed & other.listed)
         if better.any():
             chosen = chosen.where(better, other)
             name += f"; the {other_name} for {np.count_nonzero(better) / len(sources):.0%} of the vertices"

@@ -332,7 +332,8 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
     if progress is not None:
         progress(98.0, "every vertex's twin, with its confidence")
     vertex_map = None if intrinsic is None else intrinsic_vertex_map(surface, config)
-    twins = mirror_pairs(source, surface, forbidden, config, rivals, intrinsic, vertex_map)
+    twins = mirror_pairs(source, surface, forbidden, config, rivals, intrinsic, vertex_map,
+                         posed=core["mode"] == "articulated")
     doubtful = doubtful_map_warning(twins.report)
     if doubtful is not None:
         messages.append(doubtful)
