@@ -91,7 +91,7 @@ def tessellation_map(surface: Surface, maps: list[MirrorMap], sources: np.ndarra
     return None
 
 
-INTRINSIC = "intrinsic mirror"  # the name of the intrinsic mirror's map; of the whitened shape's: WHITENED_INTRINSIC
+INTRINSIC = "intrinsic mirror"  # the names of the intrinsic mirror's map and of the whitened shape's
 WHITENED_INTRINSIC = "intrinsic mirror of the whitened shape"
 
 

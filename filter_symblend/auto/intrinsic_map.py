@@ -24,7 +24,6 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..core.geometry import whitening
 from .config import AutoConfig
 from .field import tukey_weights
 from .growth import LOCAL_MAP_RIDGE, affine_mirror_maps
@@ -66,17 +65,14 @@ def spectral_candidates(surface: Surface, config: AutoConfig, whitened: bool = F
     mirror of an affine image of a symmetric shape is an isometry again once whitened, :func:`.maps.affine_map`);
     the working mesh's points are then mapped back to the shape's space."""
     def compute():
-        points, back = surface.points, None
-        if whitened:
-            centre = surface.points[surface.usable_index].mean(axis=0)
-            forward = whitening(surface.points[surface.usable_index])
-            points, back = (surface.points - centre) @ forward, (np.linalg.pinv(forward), centre)
+        centre, forward, backward = surface.whitening_frame
+        points = (surface.points - centre) @ forward if whitened else surface.points
         mesh = working_mesh(points, surface.faces[surface.triangles], surface.usable, config)
         if mesh is None:
             return None, None
         candidates = candidate_mirrors(mesh, config)
-        if back is not None:
-            mesh = WorkingMesh(mesh.points @ back[0] + back[1], mesh.faces, mesh.vertex_of)
+        if whitened:
+            mesh = WorkingMesh(mesh.points @ backward + centre, mesh.faces, mesh.vertex_of)
         return mesh, candidates
     return surface.memo(("intrinsic mirrors", config, whitened), compute)
 

@@ -17,7 +17,7 @@ import dataclasses
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..core.geometry import MirrorPlane, normalize, reflection_across_plane, whitening
+from ..core.geometry import MirrorPlane, normalize, reflection_across_plane
 from ..core.mirror_planes import fit_surface_mirror_plane
 from .config import AutoConfig
 from .field import MirrorField
@@ -73,11 +73,8 @@ def affine_map(surface: Surface) -> MirrorMap:
     """The mirror plane of the whitened shape, mapped back: an affine involution. A mirror-symmetric shape
     under any affine map is symmetric under such a map, and whitened (covariance the identity), its
     symmetry is an orthogonal reflection again, the covariance being invariant under the symmetry."""
-    used = surface.points[surface.usable_index]
-    centre = used.mean(axis=0)
-    forward = whitening(used)
-    backward = np.linalg.pinv(forward)
-    normal, offset = fit_surface_mirror_plane((used - centre) @ forward)
+    centre, forward, backward = surface.whitening_frame
+    normal, offset = fit_surface_mirror_plane((surface.points[surface.usable_index] - centre) @ forward)
 
     def predict(x: np.ndarray) -> np.ndarray:
         return reflection_across_plane((x - centre) @ forward, normal, offset) @ backward + centre

@@ -19,7 +19,7 @@ import functools
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..core.geometry import bounding_diagonal, flat_normal, normalize
+from ..core.geometry import bounding_diagonal, flat_normal, normalize, whitening
 from ..core.mesh_graph import vertex_adjacency
 from ..core.mesh_quantities import vertex_normals
 from ..core.mirror_fill import TriangleSurface
@@ -90,6 +90,15 @@ class Surface:
     def diagonal(self) -> float:
         used = self.points[self.usable_index]
         return bounding_diagonal(used)
+
+    @functools.cached_property
+    def whitening_frame(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(centre (3,), W (3, 3), its inverse (3, 3)): x -> (x - centre) @ W whitens the usable vertices
+        (covariance the identity, :func:`~filter_symblend.core.geometry.whitening`), y -> y @ W^-1 + centre
+        maps back. An affine image of a mirror-symmetric shape, whitened, is symmetric by a reflection again."""
+        used = self.points[self.usable_index]
+        forward = whitening(used)
+        return used.mean(axis=0), forward, np.linalg.pinv(forward)
 
     @functools.cached_property
     def vertex_tree(self) -> cKDTree:
