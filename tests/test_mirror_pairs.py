@@ -414,3 +414,29 @@ def test_the_benchmarks_landmark_run_takes_distinct_true_twin_pairs_apart_and_ti
     assert len(np.unique(cow.points[np.concatenate([left, right])], axis=0)) == 600
     assert (np.linalg.norm(cow.points[left] - cow.points[right], axis=1) > 0.02 * cow.diagonal).all()
     assert (confidence[left] == 1.0).all()  # enough confident twins: only those
+
+
+def test_the_corpus_benchmarks_twin_scores_count_true_twins_and_confident_wrong_ones(remeshed_cow):
+    # the corpus table's twin columns (issue 46): the true twins score (1, 0); moved 3 % of the diagonal on a
+    # quarter of the vertices, half of them confident, they score about (0.75, 0.125)
+    import sys
+    from types import SimpleNamespace
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "scripts"))
+    from benchmarks.corpus import twin_scores
+    truth = remeshed_cow
+    twin = np.full((len(truth.points), 3), np.nan)
+    twin[truth.left] = truth.twins(truth.points)
+    confidence = np.ones(len(truth.points))
+
+    def result(twin, confidence):
+        return SimpleNamespace(mirror_pairs=SimpleNamespace(per_vertex=lambda: (twin, confidence)))
+
+    assert twin_scores(result(twin, confidence), truth, truth.points) == (1.0, 0.0)
+    quarter = truth.left[: len(truth.left) // 4 * 4][::4]
+    diagonal = np.linalg.norm(np.ptp(truth.points, axis=0))
+    moved = twin.copy()
+    moved[quarter] += [0.03 * diagonal, 0.0, 0.0]
+    confidence[quarter[1::2]] = 0.0
+    within, wrong = twin_scores(result(moved, confidence), truth, truth.points)
+    assert within == pytest.approx(1 - len(quarter) / len(truth.left))
+    assert wrong == pytest.approx(len(quarter[::2]) / len(truth.left))
