@@ -562,9 +562,10 @@ def test_the_pairs_command_writes_the_chosen_symmetrys_pairs_of_a_box_to_correct
     ms.save_current_mesh(str(tmp_path / "box.ply"))
     assert main(["pairs", str(tmp_path / "box.ply"), "-o", str(tmp_path / "box.pp")]) == 0
     printed = capsys.readouterr()
-    assert "box.pp: 20 automatic pairs (of 0 confident twins; map: mirror plane;" in printed.out
+    assert "box.pp: 20 automatic pairs (of 0 confident twins; map: exact vertex pairs under the mirror plane;" in printed.out
     assert "other symmetries mirror this shape about as well (mirror plane 2, mirror plane 3" in printed.err
-    assert "these pairs follow mirror plane, whatever their confidence; keep them, or move them" in printed.err
+    assert ("these pairs follow exact vertex pairs under the mirror plane, whatever their confidence; keep them, or "
+            "move them") in printed.err
     named = {landmark.name: np.array(landmark.position) for landmark in read_landmarks(tmp_path / "box.pp").landmarks}
     left = np.array([named[f"L_auto_{k}"] for k in range(1, 21)])
     right = np.array([named[f"R_auto_{k}"] for k in range(1, 21)])

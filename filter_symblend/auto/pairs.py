@@ -80,10 +80,12 @@ def spread(points: np.ndarray, vertices: np.ndarray, count: int) -> np.ndarray:
 class FoundPairs:
     """Every pair one search under a map found (``search``: what the round reports), before ``count`` of them
     are spread over the surface (:meth:`chosen`): a round takes ``round_pairs`` of them (``auto_pair_count`` if
-    it is the last), the last solve ``auto_pair_count`` from the kept round's search."""
+    it is the last), the last solve ``auto_pair_count`` from the kept round's search. ``partner`` (N,): where the
+    twins are exact vertices, each vertex's twin (-1: unpaired); else None."""
 
     search: PairSearch
     _chosen: Callable[[int], AutomaticPairs]
+    partner: np.ndarray | None = None
 
     def chosen(self, count: int) -> AutomaticPairs:
         """About ``count`` of the pairs, spread evenly over the surface."""
@@ -187,7 +189,7 @@ def _exact_pairs(mirror: MirrorMap, sources: np.ndarray, twins, exact_twins: np.
         off_plane = spread_out[~on_plane]
         return AutomaticPairs(*vertex_points(off_plane), *vertex_points(partner[off_plane]), spread_out[on_plane],
                               search)
-    return FoundPairs(search, chosen)
+    return FoundPairs(search, chosen, np.where(automatic, partner, -1))
 
 
 def _hold_landmarks(partner: np.ndarray, fixed: LandmarkPairs | None) -> None:

@@ -36,10 +36,10 @@ from ..parameters import CORE, options_of
 from .confidence import doubtful_map_warning, mirror_pairs
 from .config import DEFAULT, AutoConfig
 from .field import MirrorField, field_centres, register
-from .first_map import coverage, first_map, intrinsic_mirror_map
+from .first_map import TESSELLATION, coverage, first_map, intrinsic_mirror_map
 from .intrinsic_map import intrinsic_vertex_map
 from .intrinsic_start import cannot_start, intrinsic_start
-from .maps import MirrorMap, field_map, plane_map
+from .maps import MirrorMap, field_map, pairs_map, plane_map
 from .pairs import Constraints, FoundPairs, as_landmarks, search_pairs, spread
 from .report import AutomaticPairsReport, Round
 from .rivals import rival_warning
@@ -71,6 +71,18 @@ def _solve_widening(points: np.ndarray, landmarks: LandmarkPairs, options: dict,
                 raise
             widened += 1
             options = {**options, "theta_width": 2.0 * options["theta_width"]}
+
+
+def _exact_pairs_map(surface: Surface, partner: np.ndarray, mirror: MirrorMap, config: AutoConfig) -> MirrorMap:
+    """The map of the exact vertex pairs ``partner`` (N,) the kept round found under ``mirror`` (a plane, a map of
+    the output), which the reported twins follow: ``mirror`` paired them within its tolerance and the growth
+    carried them on, over parts it does not follow itself (a swung limb, where its predictions land elsewhere).
+    Its normal: the pairs' principal direction, on ``mirror``'s side."""
+    paired = np.flatnonzero((partner >= 0) & (partner != np.arange(len(partner))))
+    gaps = surface.points[paired] - surface.points[partner[paired]]
+    normal = np.linalg.eigh(gaps.T @ gaps)[1][:, -1]
+    normal = normal if normal @ mirror.normal >= 0 else -normal
+    return pairs_map(surface, partner, normal, config, f"exact vertex pairs under the {mirror.name}")
 
 
 def _output_map(surface: Surface, result: SymmetrizationResult, sample: np.ndarray, config: AutoConfig) -> MirrorMap:
@@ -332,6 +344,8 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
     if progress is not None:
         progress(98.0, "every vertex's twin, with its confidence")
     vertex_map = None if intrinsic is None else intrinsic_vertex_map(surface, config)
+    if source_found is not None and source_found.partner is not None and source.name != TESSELLATION:
+        source = _exact_pairs_map(surface, source_found.partner, source, config)
     twins = mirror_pairs(source, surface, forbidden, config, rivals, intrinsic, vertex_map,
                          posed=core["mode"] == "articulated")
     doubtful = doubtful_map_warning(twins.report)
