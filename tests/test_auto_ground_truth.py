@@ -255,7 +255,7 @@ def test_exact_vertex_pairs_found_under_a_plane_are_the_reported_twins():
     """Spot (its tessellation mirrors itself) with a leg swung 0.3 rad: a plane mirrors enough of it to be the map,
     and the rounds' pair search grows exact vertex pairs over the whole surface, the leg included, so the output is
     exact. The twins reported follow those pairs, not the points the plane predicts: on the leg those were 2 % of
-    the diagonal or more off for 5 % of the vertices, a third of them confident."""
+    the diagonal or more off for 3.4 % of the vertices, about half of them confident."""
     from conftest import load_ground_truth
     spot = load_ground_truth(SHARED_DATA / "spot.obj")
     weights = synthetic.limb_weights(spot.points, **synthetic.LIMBS["spot"])
