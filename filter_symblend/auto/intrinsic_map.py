@@ -65,8 +65,10 @@ def spectral_candidates(surface: Surface, config: AutoConfig, whitened: bool = F
     mirror of an affine image of a symmetric shape is an isometry again once whitened, :func:`.maps.affine_map`);
     the working mesh's points are then mapped back to the shape's space."""
     def compute():
-        centre, forward, backward = surface.whitening_frame
-        points = (surface.points - centre) @ forward if whitened else surface.points
+        points = surface.points
+        if whitened:
+            centre, forward, backward = surface.whitening_frame
+            points = (points - centre) @ forward
         mesh = working_mesh(points, surface.faces[surface.triangles], surface.usable, config)
         if mesh is None:
             return None, None

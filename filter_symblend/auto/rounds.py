@@ -77,10 +77,9 @@ def _exact_pairs_map(surface: Surface, partner: np.ndarray, mirror: MirrorMap, c
     """The map of the exact vertex pairs ``partner`` (N,) the kept round found under ``mirror`` (a plane, a map of
     the output), which the reported twins follow: ``mirror`` paired them within its tolerance and the growth
     carried them on, over parts it does not follow itself (a swung limb, where its predictions land elsewhere).
-    Its normal: the pairs' principal direction, on ``mirror``'s side."""
+    Its normal: the pairs' best mirror plane's, on ``mirror``'s side."""
     paired = np.flatnonzero((partner >= 0) & (partner != np.arange(len(partner))))
-    gaps = surface.points[paired] - surface.points[partner[paired]]
-    normal = np.linalg.eigh(gaps.T @ gaps)[1][:, -1]
+    normal = fit_mirror_plane(surface.points[paired], surface.points[partner[paired]]).normal
     normal = normal if normal @ mirror.normal >= 0 else -normal
     return pairs_map(surface, partner, normal, config, f"exact vertex pairs under the {mirror.name}")
 
