@@ -93,31 +93,33 @@ def tukey_weights(misfit: np.ndarray, floor: float) -> np.ndarray:
     return (1.0 - np.minimum(misfit / bound, 1.0) ** 2) ** 2
 
 
-def _ridge_solve(matrix: np.ndarray, right: np.ndarray, ridge: float) -> np.ndarray:
-    size = len(matrix)
-    return np.linalg.solve(matrix + ridge * np.trace(matrix) / size * np.eye(size), right)
+def _ridge(matrix: np.ndarray, ridge: float) -> np.ndarray:
+    """``matrix`` (s, s) with ``ridge`` x its mean diagonal added to the diagonal (in place)."""
+    matrix[np.diag_indices(len(matrix))] += ridge * np.trace(matrix) / len(matrix)
+    return matrix
 
 
-def _point_normal_matrix(kernel: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """sum_i w_i (K_i K_i^T) kron I_3 for point-to-point rows; unknowns ordered (centre, axis)."""
-    gram = (kernel * weights[:, None]).T @ kernel
-    return np.kron(gram, np.eye(3))
+def _gram(kernel: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """sum_i w_i K_i K_i^T (c, c) over the rows of ``kernel`` (m, c) that weigh anything."""
+    used = weights > 0
+    return (kernel[used] * weights[used, None]).T @ kernel[used]
 
 
 def _plane_normal_matrix(kernel: np.ndarray, normals: np.ndarray, weights: np.ndarray) -> np.ndarray:
     """sum_i w_i (K_i K_i^T) kron (n_i n_i^T) for point-to-plane rows, as one product of the (m, 3c)
-    design matrix with itself."""
-    design = (kernel[:, :, None] * normals[:, None, :]).reshape(len(kernel), -1)
-    return (design * weights[:, None]).T @ design
+    design matrix with itself (the rows that weigh nothing left out); unknowns ordered (centre, axis)."""
+    used = weights > 0
+    design = (kernel[used][:, :, None] * normals[used][:, None, :]).reshape(int(used.sum()), -1)
+    return (design * weights[used, None]).T @ design
 
 
 def fit_to_pairs(field: MirrorField, x: np.ndarray, y: np.ndarray, weights: np.ndarray, ridge: float) -> None:
     """Set ``field``'s weights so that it maps ``x`` (m, 3) to ``y`` (m, 3), each pair weighing ``weights``
-    (m,)."""
+    (m,). Point-to-point rows do not couple the axes (the normal matrix is the Gram matrix kron I_3): one
+    (c, c) solve for the three of them."""
     kernel = field.kernel(x)
     residual = y - field.reflected(x)
-    right = ((kernel * weights[:, None]).T @ residual).reshape(-1)
-    field.weights = _ridge_solve(_point_normal_matrix(kernel, weights), right, ridge).reshape(-1, 3)
+    field.weights = np.linalg.solve(_ridge(_gram(kernel, weights), ridge), (kernel * weights[:, None]).T @ residual)
 
 
 def robust_fit(x: np.ndarray, y: np.ndarray, centres: np.ndarray, width: float) -> MirrorField:
@@ -165,14 +167,17 @@ def register(field: MirrorField, surface, sample: np.ndarray, iterations: int, c
         weights = (near & (distance <= bound)).astype(float)
         # A landed image z with normal n: n . (reflect(x) + K(x) W) = n . z
         target = np.einsum("ij,ij->i", landed_normals, landed - reflected)
-        design = (kernel[:, :, None] * landed_normals[:, None, :]).reshape(len(x), -1)
         matrix = _plane_normal_matrix(kernel, landed_normals, weights)
-        right = design.T @ (weights * target)
+        right = kernel.T @ (landed_normals * (weights * target)[:, None])  # design^T (w target), as (c, 3)
         # m(m(x)) = x at the current images: reflect(y) + K(y) W = x
         image_kernel = field.kernel(images)
-        matrix += INVOLUTION_WEIGHT * _point_normal_matrix(image_kernel, weights)
-        right += INVOLUTION_WEIGHT * ((image_kernel * weights[:, None]).T @ (x - field.reflected(images))).reshape(-1)
-        field.weights = _ridge_solve(matrix, right, RIDGE).reshape(-1, 3)
+        blocks = matrix.reshape(len(field.centres), 3, len(field.centres), 3)
+        involution = INVOLUTION_WEIGHT * _gram(image_kernel, weights)
+        for axis in range(3):  # + INVOLUTION_WEIGHT (Gram kron I_3), added to the axes' diagonal blocks
+            blocks[:, axis, :, axis] += involution
+        matrix = blocks.reshape(matrix.shape)
+        right += INVOLUTION_WEIGHT * ((image_kernel * weights[:, None]).T @ (x - field.reflected(images)))
+        field.weights = np.linalg.solve(_ridge(matrix, RIDGE), right.reshape(-1)).reshape(-1, 3)
     return field
 
 
