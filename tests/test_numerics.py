@@ -10,7 +10,7 @@ from scipy.spatial.distance import cdist
 from filter_symblend.core.geometry import MIRROR_X, minimal_rotation, rotation_about_axis
 from filter_symblend.core.global_solve import MINUS_X, global_solve
 from filter_symblend.core.local_symmetries import local_symmetries
-from filter_symblend.core.neighbourhoods import pair_weights, pair_weights_at
+from filter_symblend.core.neighbourhoods import _symmetric, pair_weights, pair_weights_at
 from filter_symblend.core.warp import choice, iterative, splines
 from filter_symblend.errors import SymblendWarning
 from filter_symblend.testing import synthetic
@@ -450,3 +450,21 @@ def test_the_weights_at_several_widths_from_one_search_equal_each_searched_alone
     for width, matrix in ((0.3, wide), (0.2, narrow)):
         alone = pair_weights(p, q, width)
         assert matrix.nnz == alone.nnz > 3000 and abs(matrix - alone).max() == 0.0
+
+
+@pytest.mark.parametrize("n", [3_000, 70_000])
+def test_the_symmetric_weights_equal_scipys_conversion_with_few_and_with_more_than_65536_pairs(n):
+    """The weight matrix built by the radix sort of its rows (one 16-bit pass up to 65,536 pairs, two beyond)
+    equals scipy's own conversion of the same entries, entry for entry, each row's columns in any order."""
+    rng = np.random.default_rng(5)
+    i = rng.integers(0, n - 1, 5 * n)
+    j = i + rng.integers(1, n - i)
+    _, first = np.unique(np.column_stack([i, j]), axis=0, return_index=True)  # each pair once
+    i, j, weight = i[first], j[first], rng.uniform(0.1, 1.0, len(first))
+    built = _symmetric(n, i, j, weight)
+    expected = sp.coo_matrix((np.concatenate([weight, weight, np.ones(n)]),
+                              (np.concatenate([i, j, np.arange(n)]), np.concatenate([j, i, np.arange(n)]))),
+                             shape=(n, n)).tocsr()
+    assert built.nnz == expected.nnz == 2 * len(i) + n
+    assert abs(built - expected).max() == 0.0
+    assert np.array_equal(built.indptr, expected.indptr)
