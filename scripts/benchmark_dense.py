@@ -8,7 +8,7 @@ scipy's RBFInterpolator(kernel="linear", degree=1) fitted and evaluated through 
 (the plain-scipy way to do the dominant step). With --accuracy, the chosen warp against the dense LU's
 at every vertex (the dense solve takes about 30 s at 13,000 landmarks).
 
-    python scripts/benchmark_dense.py [--pairs 1000 10000] [--accuracy] [--mesh igea|cow|cow32k]
+    python scripts/benchmark_dense.py [--pairs 1000 10000] [--accuracy] [--mesh igea|cow|cow32k|cow742k]
 """
 
 from __future__ import annotations
@@ -39,9 +39,14 @@ def mesh(name: str) -> tuple[str, np.ndarray, np.ndarray]:
     """(name, points, faces) of the benchmark mesh: Igea decimated to 32k vertices (``name`` 'igea', when
     ../shared is present: 6,496 approximate pairs at most), pymeshlab's exactly symmetric cow subdivided
     twice (``cow``: 19k vertices, a pair for every vertex off the plane), or subdivided to 46k vertices and
-    decimated to 32k (``cow32k``: the issue's mesh size with 10^4 approximate pairs and more)."""
+    decimated to 32k (``cow32k``: the issue's mesh size with 10^4 approximate pairs and more), or subdivided
+    four times (``cow742k``: 742,914 vertices, exactly symmetric: 10^5 pairs)."""
     ms = pymeshlab.MeshSet()
-    if name == "cow32k":
+    if name == "cow742k":
+        ms.load_new_mesh(str(COW))
+        ms.meshing_surface_subdivision_midpoint(iterations=4, threshold=pymeshlab.PercentageValue(0))
+        name = "cow subdivided four times"
+    elif name == "cow32k":
         ms.load_new_mesh(str(COW))
         ms.meshing_surface_subdivision_midpoint(iterations=2, threshold=pymeshlab.PercentageValue(0))
         ms.meshing_decimation_quadric_edge_collapse(targetfacenum=64_000)
@@ -74,9 +79,10 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--pairs", type=int, nargs="+", default=[1000, 10000])
     parser.add_argument("--accuracy", action="store_true", help="the warp against the dense LU's at every vertex")
-    parser.add_argument("--mesh", choices=["igea", "cow", "cow32k"], default="igea",
+    parser.add_argument("--mesh", choices=["igea", "cow", "cow32k", "cow742k"], default="igea",
                         help="igea (32k vertices, at most 6,496 pairs; the cow without ../shared), cow (19k, "
-                             "exactly symmetric: 10^4 pairs and more) or cow32k (32k, 10^4 approximate pairs)")
+                             "exactly symmetric: 10^4 pairs and more), cow32k (32k, 10^4 approximate pairs) or "
+                             "cow742k (742k, exactly symmetric: 10^5 pairs; about 5 minutes)")
     args = parser.parse_args(argv)
     name, points, faces = mesh(args.mesh)
     deformed = synthetic.figure_1_deformation(points)

@@ -1,10 +1,12 @@
-"""Work beside the caller's: the result, its errors, and BLAS restored."""
+"""Work beside the caller's: the result, its errors, and BLAS restored; a sparse product split over the cores."""
 
 import numpy as np
 import pytest
 from threadpoolctl import threadpool_info
 
-from filter_symblend.core.parallel import Beside
+import scipy.sparse as sp
+
+from filter_symblend.core.parallel import WORKERS, Beside, row_blocks
 
 
 def _blas_threads():
@@ -32,3 +34,19 @@ def test_an_error_beside_is_raised_to_the_caller_and_blas_is_restored():
     assert _blas_threads() == before
     beside.close()  # closing again does nothing
     assert _blas_threads() == before
+
+
+def test_the_product_by_row_blocks_equals_the_whole_matrixs_and_shares_its_storage():
+    """The global solve's product, its rows cut into one block per core: the same values as scipy's product
+    (rows of very different lengths, an empty one), and the blocks are views of the matrix, not copies."""
+    rng = np.random.default_rng(2)
+    emptied = np.ones(2960)
+    emptied[100] = 0.0  # an empty row
+    sparse_rows = sp.diags(emptied) @ sp.random(2960, 3000, density=0.01, format="csr", random_state=3)
+    matrix = sp.csr_matrix(sp.vstack([rng.normal(size=(40, 3000)), sparse_rows]))  # a few dense rows first
+    vectors = rng.normal(size=(3000, 3))
+    product = row_blocks(matrix)
+    np.testing.assert_allclose(product(vectors), matrix @ vectors, rtol=1e-12, atol=1e-12)
+    cells = product.__closure__  # the blocks the product holds
+    blocks = next(cell.cell_contents for cell in cells if isinstance(cell.cell_contents, list))
+    assert len(blocks) == WORKERS and all(np.shares_memory(rows.data, matrix.data) for _, _, rows in blocks)
