@@ -1,7 +1,6 @@
 """The mirror field's least squares (auto/field.py) against the dense systems they stand for: the fit to pairs as
 one Gram solve for the three axes, the registration's normal matrix without its unweighted rows and with the
-involution term added block by block, each equal to the explicit (m, 3c) design matrix's normal equations; and
-a field registered onto a bent symmetric surface lands its images on the surface."""
+involution term added block by block, each equal to the normal equations of the explicit design matrices."""
 
 import numpy as np
 import pytest

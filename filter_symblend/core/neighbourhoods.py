@@ -80,8 +80,8 @@ def _symmetric(n: int, i: np.ndarray, j: np.ndarray, weight: np.ndarray) -> sp.c
     """The symmetric (n, n) CSR matrix with ``weight`` at (i, j) and (j, i) for i < j and 1 on the diagonal, its
     rows' columns in the order they come. No entry repeats (the pairs i < j are distinct), so scipy's conversion
     is told so (``has_canonical_format``) and skips summing duplicates, which sorts every row: its counting sort
-    of the rows alone, 3x faster than the full conversion at 10^4 pairs (phi width 8, 0.24 -> 0.08 s a matrix)
-    and 10x faster than numpy's radix sort of the rows."""
+    of the rows alone, in a probe with 10^4 pairs of 800 neighbours 3x faster than the full conversion (0.24 ->
+    0.08 s a matrix) and 10x faster than numpy's radix sort of the rows; at 10^5 pairs the two matrices 12 -> 6 s."""
     entries = sp.coo_matrix((np.concatenate([weight, weight, np.ones(n)]),
                              (np.concatenate([i, j, np.arange(n)]), np.concatenate([j, i, np.arange(n)]))),
                             shape=(n, n))
