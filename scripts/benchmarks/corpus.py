@@ -13,7 +13,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from filter_symblend import SymblendError, symmetrize
-from filter_symblend.core.geometry import flat_normal, reflection_across_plane, voxel_grid
+from filter_symblend.core.geometry import bounding_diagonal, flat_normal, reflection_across_plane, voxel_grid
 from filter_symblend.core.mesh_graph import vertex_adjacency
 from filter_symblend.core.mesh_quantities import on_surface
 from filter_symblend.core.mirror_fill import distances_to_surface
@@ -72,7 +72,7 @@ def mirror_statistics(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
         distance = outline_distances(points, faces, *plane)
     else:
         distance = mirror_distances(points, faces, *plane)[used]
-    diagonal = np.linalg.norm(np.ptp(points[used], axis=0))
+    diagonal = bounding_diagonal(points[used])
     return 100 * np.array([np.sqrt(np.mean(distance**2)), np.median(distance), np.quantile(distance, 0.9)]) / diagonal
 
 
@@ -81,7 +81,7 @@ def surface_hausdorff(before: np.ndarray, after: np.ndarray, faces: np.ndarray) 
     other (the package's check, unsampled), % of the diagonal of those vertices."""
     used = on_surface(faces, len(before))
     distance = two_way_distance(before, faces, after, faces, samples=len(before))["max"]
-    return 100 * distance / np.linalg.norm(np.ptp(before[used], axis=0))
+    return 100 * distance / bounding_diagonal(before[used])
 
 
 def corpus_cases():
@@ -149,7 +149,7 @@ def twin_scores(result, truth, points: np.ndarray) -> tuple[float, float]:
     whose twin is confident (>= CONFIDENT) yet more than 2 % off) of an automatic ``result`` on ``truth``'s mesh
     at ``points`` (N, 3), the input; a vertex without a twin counts as off."""
     twin, confidence = result.mirror_pairs.per_vertex()
-    off = np.linalg.norm(twin[truth.left] - truth.twins(points), axis=1) / np.linalg.norm(np.ptp(points, axis=0))
+    off = np.linalg.norm(twin[truth.left] - truth.twins(points), axis=1) / bounding_diagonal(points)
     off = np.where(np.isfinite(off), off, np.inf)
     return float(np.mean(off <= 0.01)), float(np.mean((confidence[truth.left] >= CONFIDENT) & (off > 0.02)))
 
@@ -197,7 +197,7 @@ def corpus_main() -> None:
             else:
                 landmarks = quiet(symmetrize, points, *truth.landmarks(100), mode=mode).points
                 auto_error, landmark_error = truth.symmetry_error(output), truth.symmetry_error(landmarks)
-                moved = np.abs(output - points).max() / np.linalg.norm(np.ptp(points, axis=0))
+                moved = np.abs(output - points).max() / bounding_diagonal(points)
                 ratio = f"{auto_error / landmark_error:.3f}" if landmark_error > EXACT else f"output moved {moved:.1e}"
                 cells.append(f"{100 * auto_error:.4f} / {100 * landmark_error:.4f} ({ratio})")
                 cells.append("{:.3f} / {:.3f}".format(*twin_scores(result, truth, points)))
