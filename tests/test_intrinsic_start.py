@@ -60,6 +60,45 @@ def test_the_eigenbasis_is_the_same_on_every_call_even_where_eigenvalues_repeat(
     assert np.array_equal(first.functions, second.functions) and np.array_equal(first.values, second.values)
 
 
+def _textbook_functional_map(basis, count, descriptors, operators):
+    """The sign solve as Ren et al. write it: scipy's least squares on the explicit (count^2 (d + 2), count^2)
+    design matrix of vec(C) (the descriptors kept, each orientation operator anticommuted, the Laplacian
+    commuted), projected onto the involutions."""
+    from filter_symblend.auto.spectral import COMMUTATIVITY_WEIGHT, closest_symmetric_orthogonal
+    functions = basis.functions[:, :count]
+    coefficients = functions.T @ (basis.mass[:, None] * descriptors)
+    identity, scale = np.eye(count), np.linalg.norm(coefficients)
+    rows, right = [np.kron(coefficients.T, identity)], [coefficients.reshape(-1, order="F")]
+    for operator in operators[:, :count, :count]:
+        operator = operator * (scale / np.linalg.norm(operator))
+        rows.append(np.kron(operator.T, identity) + np.kron(identity, operator))
+        right.append(np.zeros(count * count))
+    values = basis.values[:count] / basis.values[count - 1]
+    rows.append(COMMUTATIVITY_WEIGHT * scale * np.diag(((values[:, None] - values[None, :]) ** 2).reshape(-1, order="F")))
+    right.append(np.zeros(count * count))
+    solution = np.linalg.lstsq(np.vstack(rows), np.concatenate(right), rcond=None)[0]
+    return solution.reshape(count, count, order="F"), closest_symmetric_orthogonal(solution.reshape(count, count,
+                                                                                                     order="F"))
+
+
+def test_the_sign_solve_by_its_normal_matrix_is_the_least_squares_on_the_design_matrix_and_finds_the_mirror():
+    """The bumpy blob: the functional map from the Kronecker identities' normal matrix is the explicit design
+    matrix's least-squares map at every first size, and its point map is the blob's exact mirror."""
+    from filter_symblend.auto.spectral import (DESCRIPTOR_SCALES, STARTS, eigenbasis, heat_kernel_signatures,
+                                               mirror_functional_map, orientation_operators, point_map)
+    points, faces = symmetric_blob(3)
+    basis = eigenbasis(points, faces, 30)
+    descriptors = heat_kernel_signatures(basis, DESCRIPTOR_SCALES)
+    operators = orientation_operators(points, faces, basis.functions[:, :max(STARTS)], descriptors)
+    for count in STARTS:
+        ours = mirror_functional_map(basis, count, descriptors, operators)
+        _, textbook = _textbook_functional_map(basis, count, descriptors, operators)
+        np.testing.assert_allclose(ours, textbook, atol=1e-9)
+        np.testing.assert_allclose(ours @ ours, np.eye(count), atol=1e-9)  # an involution
+    mapped = point_map(basis.functions[:, :8], mirror_functional_map(basis, 8, descriptors, operators))
+    assert np.mean(mapped == twins(points)) > 0.9
+
+
 def _textbook_zoomout(basis, vertex_map, start, stop, step):
     """ZoomOut as Melzi et al. write it, every vertex at every step, nearest neighbours by a k-d tree."""
     from filter_symblend.auto.spectral import closest_symmetric_orthogonal

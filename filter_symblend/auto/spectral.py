@@ -207,28 +207,34 @@ def closest_symmetric_orthogonal(matrix: np.ndarray) -> np.ndarray:
     return (vectors * np.where(values >= 0, 1.0, -1.0)) @ vectors.T
 
 
-def mirror_functional_map(points: np.ndarray, faces: np.ndarray, basis: Eigenbasis, count: int,
-                          descriptors: np.ndarray) -> np.ndarray:
+def mirror_functional_map(basis: Eigenbasis, count: int, descriptors: np.ndarray,
+                          operators: np.ndarray) -> np.ndarray:
     """The (count, count) functional map of the orientation-reversing intrinsic symmetry on the first
     ``count`` eigenfunctions (see the module doc), projected onto the involutions; ``descriptors`` (n, d): the
-    heat kernel signatures of ``basis`` (:func:`heat_kernel_signatures`, DESCRIPTOR_SCALES of them)."""
+    heat kernel signatures of ``basis`` (:func:`heat_kernel_signatures`, DESCRIPTOR_SCALES of them);
+    ``operators`` (d, k, k), k >= count: their :func:`orientation_operators` on the first k eigenfunctions (the
+    first ``count`` rows and columns are those on ``count``).
+
+    The least squares in vec(C) (column-major) has rows A^T kron I (C A = A), O^T kron I + I kron O for each
+    operator O (C O + O C = 0) and a diagonal (C Lambda = Lambda C); its normal matrix is formed from the
+    Kronecker identities (O^T kron I + I kron O)^T (...) = O O^T kron I + O kron O + O^T kron O^T + I kron O^T O,
+    never from the (count^2 (d + 2), count^2) design matrix: at count 24 the solve takes 0.02 s where scipy's
+    least squares on that matrix took 0.24 s (the same maps on every BCICP shape, docs/benchmarks.md; the
+    normal matrix's condition number there is at most about 1e6)."""
     functions = basis.functions[:, :count]
     coefficients = functions.T @ (basis.mass[:, None] * descriptors)  # (count, d), preserved by the mirror
-    operators = orientation_operators(points, faces, functions, descriptors)
     identity = np.eye(count)
     scale = np.linalg.norm(coefficients)
-    # Unknown vec(C), column-major: vec(C A) = (A^T kron I) vec(C), vec(C O + O C) = (O^T kron I + I kron O) vec(C).
-    rows = [np.kron(coefficients.T, identity)]
-    right = [coefficients.reshape(-1, order="F")]
-    for operator in operators:
+    kept = coefficients @ coefficients.T
+    normal = np.kron(kept, identity)
+    for operator in operators[:, :count, :count]:
         operator = operator * (scale / (np.linalg.norm(operator) or 1.0))
-        rows.append(np.kron(operator.T, identity) + np.kron(identity, operator))
-        right.append(np.zeros(count * count))
+        normal += (np.kron(operator @ operator.T, identity) + np.kron(operator, operator)
+                   + np.kron(operator.T, operator.T) + np.kron(identity, operator.T @ operator))
     values = basis.values[:count] / basis.values[count - 1]
     gaps = (values[:, None] - values[None, :]) ** 2
-    rows.append(COMMUTATIVITY_WEIGHT * scale * np.diag(gaps.reshape(-1, order="F")))
-    right.append(np.zeros(count * count))
-    solution = np.linalg.lstsq(np.vstack(rows), np.concatenate(right), rcond=None)[0]
+    normal[np.diag_indices_from(normal)] += (COMMUTATIVITY_WEIGHT * scale * gaps.reshape(-1, order="F")) ** 2
+    solution = np.linalg.solve(normal, kept.reshape(-1, order="F"))
     return closest_symmetric_orthogonal(solution.reshape(count, count, order="F"))
 
 
@@ -388,6 +394,9 @@ def candidate_mirrors(mesh: WorkingMesh, config: AutoConfig) -> list[CandidateMi
     steps = {min(size, len(basis.values)): step for size, step in config.zoomout_sizes}
     sizes = {size: Eigenbasis(basis.values[:size], basis.functions[:, :size], basis.mass) for size in steps}
     descriptors = {size: heat_kernel_signatures(truncated, DESCRIPTOR_SCALES) for size, truncated in sizes.items()}
+    operators = {size: orientation_operators(mesh.points, mesh.faces, truncated.functions[:, :max(STARTS)],
+                                             descriptors[size])
+                 for size, truncated in sizes.items()}  # once per size: each first map takes its corner
     sample = SpectralSample.of(mesh.points, basis.mass)
     tasks = [(start, size, step) for size, step in steps.items() for start in STARTS if start + 2 <= size]
 
@@ -398,7 +407,7 @@ def candidate_mirrors(mesh: WorkingMesh, config: AutoConfig) -> list[CandidateMi
     def candidate(task: tuple[int, int, int]) -> CandidateMirror:
         start, size, step = task
         truncated = sizes[size]
-        functional = mirror_functional_map(mesh.points, mesh.faces, truncated, start, descriptors[size])
+        functional = mirror_functional_map(truncated, start, descriptors[size], operators[size])
         twins = point_map(truncated.functions[:, :start], functional, sample.vertices)
         return scored(start, size, zoomout(truncated, twins, start, size, step, sample))
 
