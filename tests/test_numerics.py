@@ -226,6 +226,27 @@ def test_the_hand_written_spline_equals_scipys_rbf_interpolator():
                                atol=1e-9 * np.abs(expected).max())
 
 
+@pytest.mark.parametrize("parallel", [True, False])
+def test_vertices_that_are_landmarks_are_evaluated_exactly_block_by_block(parallel):
+    """Every landmark a vertex (as with dense automatic pairs), and as many vertices within 1e-9 of one: all of
+    them near a landmark, re-evaluated from coordinate differences in many blocks, on the cores or not; the
+    same values as scipy's direct sum, and the landmarks' own values."""
+    from scipy.spatial.distance import cdist
+    rng = np.random.default_rng(5)
+    centres = rng.normal(size=(3000, 3))
+    values = rng.normal(size=(3000, 3))
+    points = np.vstack([centres, centres + 1e-9])
+    spline = splines.ThinPlateSpline(centres, values)
+    assert len(points) > 10 * (splines.BLOCK_ELEMENTS // len(centres))  # many blocks
+    ours = spline(points, parallel=parallel)
+    scaled = (points - spline._shift) / spline._scale
+    distances = cdist(scaled, spline._centres)
+    direct = spline._polynomial_part(scaled) - distances @ spline._weights
+    terms = (distances @ np.abs(spline._weights)).max()  # the sum's rounding: its terms' size, not its own
+    np.testing.assert_allclose(ours, direct, rtol=0, atol=1e-14 * terms)
+    np.testing.assert_allclose(ours[:3000], values, rtol=0, atol=1e-14 * terms)
+
+
 def test_the_approximate_spline_stays_close_to_the_exact_one_on_a_smooth_map(monkeypatch):
     """Many landmarks of a smooth deformation: the approximation (exact spline through a
     farthest-point subset plus local splines of the residual on patches) is exact at every landmark and within

@@ -17,7 +17,7 @@ with the weights. Measured 3.4x faster than RBFInterpolator's evaluation at 537k
 vertices x 4,000 landmarks on 2 cores, with memory bounded by the blocks.
 Expanding |x - c|^2 loses digits for x within NEAR (of the landmarks' extent) of
 a landmark, so those vertices are evaluated again from coordinate differences
-(scipy's cdist).
+(scipy's cdist, a block at a time).
 
 Beyond the landmarks an iterative solve reaches (warp/choice.py), the exact spline is out of
 reach (its evaluation grows as k per vertex, each iteration step as k^2), so
@@ -180,17 +180,31 @@ class ThinPlateSpline:
             if progress is not None and (end / len(x) >= reported + 0.05 or end == len(x)):
                 reported = end / len(x)
                 progress(reported)
-        return self._exact_near(x, out, own_centres=False)
+        return self._exact_near(x, out, own_centres=False, parallel=parallel)
 
-    def _exact_near(self, x: np.ndarray, out: np.ndarray, own_centres: bool) -> np.ndarray:
+    def _exact_near(self, x: np.ndarray, out: np.ndarray, own_centres: bool, parallel: bool = True) -> np.ndarray:
         """``out`` (m, d) with the values at the ``x`` within NEAR of a centre (another one, for the centres
-        themselves) computed again from coordinate differences."""
+        themselves) computed again from coordinate differences (:meth:`_kernel_part`; ``parallel``: on every core)."""
         nearest = cKDTree(self._centres).query(x, k=2 if own_centres else 1, distance_upper_bound=NEAR,
                                                workers=-1)[0]
         near = np.flatnonzero((nearest[:, 1] if own_centres else nearest) <= NEAR)  # another centre that near
         if near.size:
-            out[near] = self._polynomial_part(x[near]) - cdist(x[near], self._centres) @ self._weights
+            out[near] = self._polynomial_part(x[near]) - self._kernel_part(x[near], parallel)
         return out
+
+    def _kernel_part(self, x: np.ndarray, parallel: bool) -> np.ndarray:
+        """sum_i w_i |x - c_i| (m, d) at ``x`` (m, 3) from coordinate differences (scipy's cdist), a block of
+        about BLOCK_ELEMENTS distances at a time, the blocks on every core with ``parallel``. One cdist of all
+        m x k distances writes them to memory and reads them back for the product: at 5,900 landmarks, the
+        vertices that are landmarks (every one of them near one) took 0.67 s where the blocks take 0.06 s."""
+        rows = max(1, BLOCK_ELEMENTS // len(self._centres))
+
+        def block(start: int) -> np.ndarray:
+            return cdist(x[start:start + rows], self._centres) @ self._weights
+
+        starts = range(0, len(x), rows)
+        blocks = in_threads(block, starts) if parallel and len(starts) > 1 else map(block, starts)
+        return np.concatenate(list(blocks))
 
 
 def _wendland(t: np.ndarray) -> np.ndarray:
