@@ -220,7 +220,7 @@ def mirror_functional_map(basis: Eigenbasis, count: int, descriptors: np.ndarray
     Kronecker identities (O^T kron I + I kron O)^T (...) = O O^T kron I + O kron O + O^T kron O^T + I kron O^T O,
     never from the (count^2 (d + 2), count^2) design matrix: at count 24 the solve takes 0.02 s where scipy's
     least squares on that matrix took 0.24 s (the same maps on every BCICP shape, docs/benchmarks.md; the
-    normal matrix's condition number there is at most about 1e6)."""
+    normal matrix's condition number there at most 2.5e5)."""
     functions = basis.functions[:, :count]
     coefficients = functions.T @ (basis.mass[:, None] * descriptors)  # (count, d), preserved by the mirror
     identity = np.eye(count)
