@@ -6,7 +6,8 @@ mirrored way). A plane that mirrors a body of revolution but not the parts on it
 plane through the parts; a plane that mirrors the middle of a bent shape loses to a map that follows
 the bend. One rule chooses: the candidates are made cheapest first, each scored, until one mirrors
 enough of the surface that no other could mirror much more (``plane_suffices``, or ``field_suffices`` where no
-plain map mirrors ``min_coverage``: a strong bend, where a field can mirror 95 % and still slide); the one that
+plain map mirrors ``min_coverage``: a strong bend, where a field can mirror 95 % and still slide; and on a posed
+body, where a plane that mirrors 95 % can leave a swung limb unpaired); the one that
 mirrors the most of all those made is the map, refused if it mirrors less than ``min_coverage``. The
 candidates, in order:
 
@@ -143,8 +144,8 @@ class _Search:
     """The candidates tried, each scored once on the ``scored`` vertices: ``maps`` {name: map} and ``shares``
     {name: share}; ``best``, the one that mirrors the most (the first tried among equals)."""
 
-    def __init__(self, scored: np.ndarray, config: AutoConfig):
-        self.scored, self.config = scored, config
+    def __init__(self, scored: np.ndarray, config: AutoConfig, posed: bool = False):
+        self.scored, self.config, self.posed = scored, config, posed
         self.maps: dict[str, MirrorMap] = {}
         self.shares: dict[str, float] = {}
         self.rigid: list[MirrorMap] = []  # the plain maps: planes and the whitened plane
@@ -199,10 +200,11 @@ class _Search:
         """Whether the best map mirrors enough of the surface that no other could mirror much more:
         ``plane_suffices`` where a plain map mirrors ``min_coverage`` (a rigid pose, a scan) or ``plane_suffices``
         itself, ``field_suffices`` where none does (a strong bend, a pose: a field can mirror 95 % and still
-        slide)."""
+        slide) and for a posed body (``posed``: a plane that mirrors 95 % of it can leave a swung limb
+        unpaired, which the intrinsic mirror pairs)."""
         config = self.config
         rigid = max(self.shares[mirror.name] for mirror in self.rigid)
-        plain = rigid >= min(config.min_coverage, config.plane_suffices)
+        plain = rigid >= min(config.min_coverage, config.plane_suffices) and not self.posed
         enough = config.plane_suffices if plain else config.field_suffices
         return self.shares[self.best.name] >= enough
 
@@ -281,7 +283,7 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, compress
     be compressed as a whole (not a posed body, ``mode='articulated'``), so that the whitened shape's intrinsic
     mirror is a candidate."""
     planes = surface_mirror_planes(surface.points[surface.usable_index])
-    search = _Search(scored, config)
+    search = _Search(scored, config, posed=not compression)
     try:
         for batch in _candidates(surface, planes, search, config, compression, progress):
             for mirror in batch:
