@@ -142,7 +142,8 @@ class FirstMap(NamedTuple):
 
 class _Search:
     """The candidates tried, each scored once on the ``scored`` vertices: ``maps`` {name: map} and ``shares``
-    {name: share}; ``best``, the one that mirrors the most (the first tried among equals)."""
+    {name: share}; ``best``, the one that mirrors the most (the first tried among equals); ``posed``: the shape is a
+    posed body (``mode='articulated'``), whose search a plane does not end (:attr:`suffices`)."""
 
     def __init__(self, scored: np.ndarray, config: AutoConfig, posed: bool = False):
         self.scored, self.config, self.posed = scored, config, posed
@@ -281,7 +282,7 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, compress
     """The first mirror map (see the module doc); SymmetryNotFoundError when none mirrors ``min_coverage`` of
     the surface. ``scored`` (m,): the vertices the shares are measured on; ``compression``: whether the shape may
     be compressed as a whole (not a posed body, ``mode='articulated'``), so that the whitened shape's intrinsic
-    mirror is a candidate."""
+    mirror is a candidate; a posed body's search goes on past a plane that mirrors ``plane_suffices``."""
     planes = surface_mirror_planes(surface.points[surface.usable_index])
     search = _Search(scored, config, posed=not compression)
     try:
