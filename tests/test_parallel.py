@@ -6,7 +6,7 @@ from threadpoolctl import threadpool_info
 
 import scipy.sparse as sp
 
-from filter_symblend.core.parallel import WORKERS, Beside, row_blocks
+from filter_symblend.core.parallel import WORKERS, Beside, blockwise, row_blocks
 
 
 def _blas_threads():
@@ -50,3 +50,12 @@ def test_the_product_by_row_blocks_equals_the_whole_matrixs_and_shares_its_stora
     cells = product.__closure__  # the blocks the product holds
     blocks = next(cell.cell_contents for cell in cells if isinstance(cell.cell_contents, list))
     assert len(blocks) == WORKERS and all(np.shares_memory(rows.data, matrix.data) for _, _, rows in blocks)
+
+
+def test_blockwise_keeps_the_order_and_starts_no_pool_for_one_item_or_when_told_not_to():
+    import threading
+
+    here = threading.get_ident()
+    assert list(blockwise(lambda k: k * k, range(50))) == [k * k for k in range(50)]
+    assert list(blockwise(lambda _: threading.get_ident(), range(1))) == [here]
+    assert set(blockwise(lambda _: threading.get_ident(), range(8), parallel=False)) == {here}

@@ -100,8 +100,7 @@ def find_twins(mirror: MirrorMap, sources: np.ndarray, tolerance: float) -> Twin
     vertex, vertex_distance, ratio = surface.nearest_vertices(landed.predicted)
     returning, _, _ = surface.nearest_vertices(mirror.predict(surface.points[vertex]))
     side = np.where((positions - landed.point) @ mirror.normal >= 0, 1, -1).astype(np.int8)
-    return Twins(**{field.name: getattr(landed, field.name) for field in dataclasses.fields(Landing)},
-                 sources=sources, vertex=vertex, vertex_distance=vertex_distance, ratio=ratio,
+    return Twins(**vars(landed), sources=sources, vertex=vertex, vertex_distance=vertex_distance, ratio=ratio,
                  spacing=surface.local_spacing[vertex], mutual=returning == sources, side=side)
 
 

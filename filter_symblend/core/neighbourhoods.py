@@ -16,7 +16,7 @@ from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
 from ..errors import DisconnectedPairsError, id_list
-from .parallel import in_threads
+from .parallel import blockwise
 
 TRUNCATION = 3.0
 
@@ -52,8 +52,7 @@ def _max_side_distance(left: np.ndarray, right: np.ndarray, i: np.ndarray, j: np
             squared = np.einsum("ij,ij->i", difference, difference)
             largest = squared if largest is None else np.maximum(largest, squared, out=largest)
         np.sqrt(largest, out=out[start:start + DISTANCE_BLOCK])
-    starts = range(0, len(i), DISTANCE_BLOCK)
-    for _ in (in_threads(block, starts, limit_blas=False) if len(starts) > 1 else map(block, starts)):
+    for _ in blockwise(block, range(0, len(i), DISTANCE_BLOCK), limit_blas=False):
         pass
     return out
 

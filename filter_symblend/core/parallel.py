@@ -3,7 +3,7 @@ release the GIL, so threads run them in parallel without copying the data."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 import contextlib
 import os
@@ -28,6 +28,12 @@ def in_threads(task: Callable, items: Iterable, limit_blas: bool = True):
             yield from pool.map(task, items)
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+def blockwise(task: Callable, items: Sequence, parallel: bool = True, limit_blas: bool = True):
+    """``task(item)`` for every item, in order: :func:`in_threads` when ``parallel`` and there are two items or
+    more, else in this thread (one item: no pool to start; ``parallel`` False: a caller already in threads)."""
+    return in_threads(task, items, limit_blas) if parallel and len(items) > 1 else map(task, items)
 
 
 def side_by_side(first: Callable, second: Callable):

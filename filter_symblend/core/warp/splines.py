@@ -40,7 +40,7 @@ from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
 from ..mesh_quantities import farthest_point_order
-from ..parallel import WORKERS, in_threads
+from ..parallel import WORKERS, blockwise, in_threads
 
 BLOCK_ELEMENTS = 2**17  # distances per evaluation block (1 MB of float64; measured fastest of 2^15..2^22)
 CHUNK_ROWS = 2**14  # vertices per task of the thread pool (fewer when that leaves a core idle)
@@ -173,10 +173,8 @@ class ThinPlateSpline:
                 out[row:row + len(block)] -= here @ self._weights
             return end
 
-        starts = range(0, len(x), chunk)
-        threaded = parallel and len(starts) > 1  # one chunk: no pool to start
         reported = 0.0
-        for end in (in_threads(evaluate_chunk, starts) if threaded else map(evaluate_chunk, starts)):
+        for end in blockwise(evaluate_chunk, range(0, len(x), chunk), parallel):
             if progress is not None and (end / len(x) >= reported + 0.05 or end == len(x)):
                 reported = end / len(x)
                 progress(reported)
@@ -202,9 +200,7 @@ class ThinPlateSpline:
         def block(start: int) -> np.ndarray:
             return cdist(x[start:start + rows], self._centres) @ self._weights
 
-        starts = range(0, len(x), rows)
-        blocks = in_threads(block, starts) if parallel and len(starts) > 1 else map(block, starts)
-        return np.concatenate(list(blocks))
+        return np.concatenate(list(blockwise(block, range(0, len(x), rows), parallel)))
 
 
 def _wendland(t: np.ndarray) -> np.ndarray:
