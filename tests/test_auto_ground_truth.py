@@ -226,6 +226,58 @@ def test_the_local_maps_shared_by_vertices_with_the_same_nearest_pairs_are_each_
     np.testing.assert_allclose(rigid, expected_rigid, atol=1e-12)
 
 
+def _growth_trying_every_source(surface, partner, eligible, twin_ok, config):
+    """The growth as first written, every unpaired source near the pairs tried again each wave: the reference."""
+    from scipy.spatial import cKDTree
+    from filter_symblend.auto.growth import FRONTIER, RATIO, local_maps
+    from filter_symblend.core.mesh_graph import one_pair_per_vertex
+    points, waves = surface.points, 0
+    while True:
+        paired = np.flatnonzero(partner >= 0)
+        tree = cKDTree(points[paired])
+        unpaired = np.flatnonzero(eligible & (partner < 0))
+        sources = unpaired[np.isfinite(tree.query(points[unpaired], distance_upper_bound=FRONTIER * surface.spacing)[0])]
+        predicted, rigid = local_maps(points, partner, points[sources], paired, tree, config)
+        vertex, _, ratio = surface.nearest_vertices(predicted)
+        back = surface.nearest_vertices(local_maps(points, partner, points[vertex], paired, tree, config)[0])[0]
+        ok = (ratio <= RATIO) & (back == sources) & (partner[vertex] < 0) & twin_ok[vertex]
+        ok &= np.einsum("nij,nj,ni->n", rigid, surface.normals[sources], surface.normals[vertex]) > 0
+        sources, vertex = one_pair_per_vertex(sources[ok], vertex[ok])
+        if not len(sources):
+            return waves
+        partner[sources], partner[vertex] = vertex, sources
+        waves += 1
+
+
+def test_the_growth_tries_a_failed_source_again_only_when_a_new_pair_comes_within_reach_of_its_maps(
+        remeshed_cow, monkeypatch):
+    """On a surface whose vertices have no exact twins the growth creeps from chance seeds, a few pairs a wave;
+    a source that failed is skipped until a new pair could change its maps. The pairs and waves must be those of
+    the growth that tries every source every wave, for fewer local maps."""
+    from filter_symblend.auto import growth
+    from filter_symblend.auto.surface import Surface
+    points = synthetic.bend(remeshed_cow.points, 0.6)
+    surface, config = Surface(points, remeshed_cow.faces), AutoConfig()
+    vertex, distance, _ = surface.nearest_vertices(synthetic.bend(remeshed_cow.points * [-1.0, 1.0, 1.0], 0.6))
+    mutual = vertex[vertex] == np.arange(len(points))
+    seeds = np.flatnonzero(mutual & (distance < 0.1 * surface.local_spacing))  # chance near-twins
+    partner = np.full(len(points), -1)
+    partner[seeds] = vertex[seeds]
+    everywhere = np.ones(len(points), dtype=bool)
+    queried = []  # the sources and vertices each growth fitted local maps for
+    original = growth._local_maps
+    monkeypatch.setattr(growth, "_local_maps", lambda p, q, queries, *a: queried.append(len(queries)) or
+                        original(p, q, queries, *a))
+    expected = partner.copy()
+    expected_waves = _growth_trying_every_source(surface, expected, everywhere, everywhere, config)
+    reference_queries, queried[:] = sum(queried), []
+    waves = growth.grow(surface, partner, everywhere, everywhere, config)
+    assert expected_waves >= 5 and 4 <= len(seeds) < 0.1 * np.count_nonzero(expected >= 0)  # it crept from them
+    assert waves == expected_waves
+    np.testing.assert_array_equal(partner, expected)
+    assert sum(queried) < 0.5 * reference_queries
+
+
 def test_the_parts_of_a_body_of_revolution_decide_its_mirror_plane():
     """Every plane through the axis mirrors the body; only y = 0 mirrors the knob and the ridge too."""
     points, faces = synthetic.body_with_two_parts()

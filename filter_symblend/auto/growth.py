@@ -53,13 +53,22 @@ def local_maps(points: np.ndarray, partner: np.ndarray, queries: np.ndarray, pai
     weigh alike, so a map depends only on its set of pairs: queries that share one (most of a dense mesh
     between sparser pairs: 10^6 vertices among 6,000 pairs) share one fit."""
     k = min(config.local_neighbours + int(leave_out), len(paired))
-    _, nearest = tree.query(queries, k=k)
+    predicted, rigid, _ = _local_maps(points, partner, queries, paired, tree, k, leave_out)
+    return predicted, rigid
+
+
+def _local_maps(points: np.ndarray, partner: np.ndarray, queries: np.ndarray, paired: np.ndarray,
+                tree: cKDTree, k: int, leave_out: bool = False):
+    """:func:`local_maps` on the ``k`` nearest pairs, and the reach (m,) of each map: the distance from its
+    query to the farthest of them (a pair added farther away leaves the map as it is)."""
+    distance, nearest = tree.query(queries, k=k)
     neighbours = np.sort(paired[nearest.reshape(len(queries), k)[:, int(leave_out):]], axis=1)
     sets, fit_of = np.unique(neighbours, axis=0, return_inverse=True)
     x, y = points[sets], points[partner[sets]]
     linear, cx, cy, rigid = affine_mirror_fits(x, y, np.ones(x.shape[:2]), LOCAL_MAP_RIDGE)
     fit_of = fit_of.reshape(-1)
-    return np.einsum("nij,nj->ni", linear[fit_of], queries - cx[fit_of]) + cy[fit_of], rigid[fit_of]
+    predicted = np.einsum("nij,nj->ni", linear[fit_of], queries - cx[fit_of]) + cy[fit_of]
+    return predicted, rigid[fit_of], distance.reshape(len(queries), k)[:, -1]
 
 
 def affine_mirror_maps(x: np.ndarray, y: np.ndarray, weights: np.ndarray, queries: np.ndarray, ridge: float):
@@ -84,22 +93,21 @@ def affine_mirror_fits(x: np.ndarray, y: np.ndarray, weights: np.ndarray, ridge:
     return linear, cx, cy, rigid
 
 
-def _accepted(surface: Surface, sources, predicted, rigid, back):
-    """(m,) bool and the twin vertices (m,): predictions whose nearest vertex is unambiguous, facing the
-    mirrored way, and predicts the source back."""
-    vertex, _, ratio = surface.nearest_vertices(predicted)
-    ok = ratio <= RATIO
-    if surface.is_mesh:
-        ok &= np.einsum("nij,nj,ni->n", rigid, surface.normals[sources], surface.normals[vertex]) > 0
-    ok &= back(vertex) == sources
-    return ok, vertex
-
-
 def grow(surface: Surface, partner: np.ndarray, eligible: np.ndarray, twins: np.ndarray, config: AutoConfig) -> int:
     """Pair ``eligible`` (N,) bool vertices, with ``twins`` (N,) bool vertices, wave by wave from the pairs in
     ``partner`` (N,) (twin index, itself on the midline, -1 unpaired; updated in place). Returns the number
-    of waves."""
+    of waves.
+
+    A wave tries the unpaired vertices near the pairs: the local map of a source's nearest pairs predicts its
+    twin, which is taken if its nearest vertex is unambiguous, unpaired, faces the mirrored way, and the local
+    map there sends it back to the source. A source that fails is not tried again until a new pair falls within
+    the reach of the maps that decided it (its own, and the one at the vertex it named): until then the same
+    maps give the same answer. On two sides sampled independently the growth creeps, a few chance pairs a
+    wave among some two thousand sources, and each wave tried all of them again."""
     points = surface.points
+    count = len(points)
+    failed = np.zeros(count, dtype=bool)  # sources whose failure stands until a new pair comes within reach
+    reach, named, named_reach = np.zeros(count), np.zeros(count, dtype=np.int64), np.zeros(count)
     waves = 0
     while True:
         paired = np.flatnonzero(partner >= 0)
@@ -109,20 +117,34 @@ def grow(surface: Surface, partner: np.ndarray, eligible: np.ndarray, twins: np.
         unpaired = np.flatnonzero(eligible & (partner < 0))
         gap, _ = tree.query(points[unpaired], distance_upper_bound=FRONTIER * surface.spacing)
         sources = unpaired[np.isfinite(gap)]
+        sources = sources[~failed[sources]]
         if not len(sources):
             return waves
-        predicted, rigid = local_maps(points, partner, points[sources], paired, tree, config)
-
-        def back(vertices):
-            return surface.nearest_vertices(local_maps(points, partner, points[vertices], paired, tree, config)[0])[0]
-
-        ok, vertex = _accepted(surface, sources, predicted, rigid, back)
-        ok &= (partner[vertex] < 0) & twins[vertex]
+        k = min(config.local_neighbours, len(paired))
+        predicted, rigid, source_reach = _local_maps(points, partner, points[sources], paired, tree, k)
+        vertex, _, ratio = surface.nearest_vertices(predicted)
+        ok = (ratio <= RATIO) & (partner[vertex] < 0) & twins[vertex]
+        if surface.is_mesh:
+            ok &= np.einsum("nij,nj,ni->n", rigid, surface.normals[sources], surface.normals[vertex]) > 0
+        tried_back = np.flatnonzero(ok)
+        back, _, back_reach = _local_maps(points, partner, points[vertex[tried_back]], paired, tree, k)
+        ok[tried_back] = surface.nearest_vertices(back)[0] == sources[tried_back]
+        lost = sources[~ok]
+        failed[lost], reach[lost], named[lost], named_reach[lost] = True, source_reach[~ok], vertex[~ok], -np.inf
+        named_reach[sources[tried_back]] = back_reach  # the failures among them: the back map decided
         sources, vertex = one_pair_per_vertex(sources[ok], vertex[ok])
         if not len(sources):
             return waves
         partner[sources], partner[vertex] = vertex, sources
         waves += 1
+        if k < config.local_neighbours:  # every pair is in every map: a new one changes them all
+            failed[:] = False
+            continue
+        waiting = np.flatnonzero(failed)
+        near_new = cKDTree(points[np.concatenate([sources, vertex])])
+        changed = (near_new.query(points[waiting])[0] <= reach[waiting]) | \
+            (near_new.query(points[named[waiting]])[0] <= named_reach[waiting])
+        failed[waiting[changed]] = False
 
 
 def prune(surface: Surface, partner: np.ndarray, fixed: np.ndarray, config: AutoConfig, floor: float) -> np.ndarray:
