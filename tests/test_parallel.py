@@ -6,7 +6,7 @@ from threadpoolctl import threadpool_info
 
 import scipy.sparse as sp
 
-from filter_symblend.core.parallel import WORKERS, Beside, blockwise, row_blocks
+from filter_symblend.core.parallel import WORKERS, Beside, blockwise, in_threads, row_blocks
 
 
 def _blas_threads():
@@ -20,6 +20,16 @@ def test_work_beside_gives_its_result_with_blas_held_to_one_thread_and_restores_
     product, threads = beside.result()
     np.testing.assert_allclose(product, np.einsum("ij,kj->ik", matrix, matrix), rtol=1e-12, atol=1e-12)
     assert all(count == 1 for count in threads)
+    assert _blas_threads() == before
+
+
+def test_threads_hold_every_loaded_blas_to_one_thread_and_restore_it():
+    """The limit comes from a controller found once (at import); threadpoolctl's fresh inspection here must see
+    every BLAS loaded (numpy's, and scipy's own where it has one) at one thread inside, as before after."""
+    import scipy.linalg  # noqa: F401  (scipy's BLAS, if it has its own, is loaded)
+    before = _blas_threads()
+    seen = list(in_threads(lambda _: _blas_threads(), range(2 * WORKERS)))
+    assert all(threads == [1] * len(before) for threads in seen), seen
     assert _blas_threads() == before
 
 

@@ -55,7 +55,9 @@ COMMUTATIVITY_WEIGHT = 1.0
 # Vertices a ZoomOut step maps (farthest-point sampled): each step's exhaustive search costs samples x n, not
 # n x n; a mesh with fewer vertices maps them all.
 ZOOMOUT_SAMPLES = 1500
-POINT_MAP_ROWS = 512  # rows of point_map's distance block: 512 x n float32, 10 MB at n = 5,000
+# Rows of point_map's distance block: 128 x n float32, 2.5 MB at n = 5,000, near the cache; 512 rows (10 MB) made
+# the same products 1.1-1.7x slower (the ten candidates of a posed 5k body 2.5 -> 2.0 s), the same twins.
+POINT_MAP_ROWS = 128
 MINIMUM_TRIANGLES = 48  # a working mesh with fewer cannot carry a dozen eigenfunctions (four triangles each)
 # First functional map sizes (eigenfunctions) tried: the sign solve is sensitive to the size where the pose is
 # strong (a size may give another near-symmetry, or fold a limb onto itself), so each gives a candidate.

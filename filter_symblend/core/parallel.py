@@ -9,10 +9,20 @@ import contextlib
 import os
 
 import numpy as np
+import scipy.linalg  # noqa: F401  (loads scipy's own BLAS, so that _BLAS finds it too)
 import scipy.sparse as sp
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
 WORKERS = os.cpu_count() or 1
+# numpy's and scipy's BLAS, found once: threadpool_limits() looks for them again on every call (1.1 ms; a solve
+# with automatic pairs holds BLAS to one thread some 20-70 times), a controller's limit() does not (0.01 ms).
+_BLAS = ThreadpoolController()
+
+
+def one_blas_thread():
+    """BLAS held to one thread until the returned limiter's ``restore_original_limits()`` (or the end of its
+    ``with`` block): the limits are process-wide."""
+    return _BLAS.limit(limits=1, user_api="blas")
 
 
 def in_threads(task: Callable, items: Iterable, limit_blas: bool = True):
@@ -24,7 +34,7 @@ def in_threads(task: Callable, items: Iterable, limit_blas: bool = True):
     items not started."""
     pool = ThreadPoolExecutor(WORKERS)
     try:
-        with threadpool_limits(limits=1, user_api="blas") if limit_blas else contextlib.nullcontext():
+        with one_blas_thread() if limit_blas else contextlib.nullcontext():
             yield from pool.map(task, items)
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
@@ -41,7 +51,7 @@ def side_by_side(first: Callable, second: Callable):
     around both (set once here, so no concurrent caller changes it)."""
     pool = ThreadPoolExecutor(1)
     try:
-        with threadpool_limits(limits=1, user_api="blas"):
+        with one_blas_thread():
             future = pool.submit(first)
             second_result = second()
             return future.result(), second_result
@@ -56,7 +66,7 @@ class Beside:
     intrinsic mirror beside a posed body's other candidates, its first map 0.2-1.0 s faster (of 5-7 s)."""
 
     def __init__(self, task: Callable):
-        self._limits = threadpool_limits(limits=1, user_api="blas")
+        self._limits = one_blas_thread()
         self._pool = ThreadPoolExecutor(1)
         self._future = self._pool.submit(task)
 
