@@ -15,7 +15,7 @@ from threadpoolctl import ThreadpoolController
 
 WORKERS = os.cpu_count() or 1
 # numpy's and scipy's BLAS, found once: threadpool_limits() looks for them again on every call (1.1 ms; a solve
-# with automatic pairs holds BLAS to one thread some 20-70 times), a controller's limit() does not (0.01 ms).
+# with automatic pairs holds BLAS to one thread about 20 times), a controller's limit() does not (0.01 ms).
 _BLAS = ThreadpoolController()
 
 
