@@ -28,10 +28,15 @@ def test_closest_points_on_triangles_match_a_dense_sampling():
         assert weights.min() > -1e-9 and weights.sum() < 1 + 1e-9
 
 
-def test_the_surface_search_finds_what_every_triangle_measured_finds(cow):
+@pytest.mark.parametrize("batches", ["one", "several, on every core"])
+def test_the_surface_search_finds_what_every_triangle_measured_finds(cow, batches, monkeypatch):
     """The search measures only the candidates that can beat the nearest centroid's triangle; queries near the
     surface, on it and at vertices (where several triangles tie) get the distance and point that measuring every
-    triangle gives, and the first triangle of equal ones."""
+    triangle gives, and the first triangle of equal ones: in one batch, and in batches on every core."""
+    from filter_symblend.core import mirror_fill
+    if batches != "one":
+        monkeypatch.setattr(mirror_fill, "QUERY_CHUNK", 200)
+        monkeypatch.setattr(mirror_fill, "PARALLEL_QUERIES", 100)
     rng = np.random.default_rng(3)
     diagonal = np.linalg.norm(np.ptp(cow.points, axis=0))
     queries = np.vstack([cow.points[::9] + rng.normal(size=(len(cow.points[::9]), 3)) * 0.01 * diagonal,

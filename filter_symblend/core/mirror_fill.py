@@ -14,9 +14,11 @@ from scipy.spatial import cKDTree
 from ..errors import GeometryError
 from .geometry import reflection_across_plane
 from .mesh_quantities import mean_spacing
+from .parallel import WORKERS, blockwise
 
 CANDIDATE_FACES = 16  # nearest triangle centroids searched per query point
 QUERY_CHUNK = 20000  # queries per batch: bounds memory to about 100 MB
+PARALLEL_QUERIES = 1000  # the fewest queries a batch on a core of its own (see TriangleSurface.nearest)
 
 
 def closest_points_on_triangles(points: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -65,36 +67,43 @@ class TriangleSurface:
                                       for corner in range(3)], axis=0))
 
     def nearest(self, queries: np.ndarray):
-        """(face (Q,), closest point (Q, 3), distance (Q,)) for each query (Q, 3), in batches of ``QUERY_CHUNK``.
-        Of the candidates, only those that can beat the nearest centroid's triangle are measured: a
-        triangle is no nearer than its centroid's distance less its radius (the same answer as measuring
-        all of them, 1-3x faster)."""
-        k = min(CANDIDATE_FACES, len(self.faces))
+        """(face (Q,), closest point (Q, 3), distance (Q,)) for each query (Q, 3), in batches of at most
+        ``QUERY_CHUNK`` on every core (a k-d tree's queries and numpy's arithmetic release the GIL; at least
+        ``PARALLEL_QUERIES`` a batch, below which a thread costs more than it saves). Of the candidates, only
+        those that can beat the nearest centroid's triangle are measured: a triangle is no nearer than its
+        centroid's distance less its radius (the same answer as measuring all of them, 1-3x faster)."""
         face = np.empty(len(queries), dtype=np.int64)
         closest = np.empty((len(queries), 3))
         distance = np.empty(len(queries))
-        for start in range(0, len(queries), QUERY_CHUNK):
-            chunk = queries[start:start + QUERY_CHUNK]
-            centre_distance, candidates = self.tree.query(chunk, k=k)
-            centre_distance, candidates = centre_distance.reshape(len(chunk), k), candidates.reshape(len(chunk), k)
-            first = self._closest(chunk, candidates[:, 0])
-            first_gap = np.linalg.norm(first - chunk, axis=1)
-            beaten = centre_distance[:, 1:] - self.radius[candidates[:, 1:]] < first_gap[:, None]
-            rows, columns = np.nonzero(beaten)
-            found = self._closest(chunk[rows], candidates[rows, columns + 1])
-            gaps = np.linalg.norm(found - chunk[rows], axis=1)
-            nearer = gaps < first_gap[rows]
-            # Written farthest first, so that each row keeps its nearest, the first candidate of equal ones.
-            measured = np.flatnonzero(nearer)
-            order = measured[np.lexsort((-columns[measured], -gaps[measured]))]
-            best_face, best_point, best_gap = candidates[:, 0].copy(), first, first_gap
-            best_face[rows[order]] = candidates[rows[order], columns[order] + 1]
-            best_point[rows[order]] = found[order]
-            best_gap[rows[order]] = gaps[order]
-            face[start:start + len(chunk)] = best_face
-            closest[start:start + len(chunk)] = best_point
-            distance[start:start + len(chunk)] = best_gap
+        chunk = min(QUERY_CHUNK, max(PARALLEL_QUERIES, -(-len(queries) // WORKERS)))
+
+        def batch(start: int) -> None:
+            end = start + chunk
+            face[start:end], closest[start:end], distance[start:end] = self._nearest(queries[start:end])
+        for _ in blockwise(batch, range(0, len(queries), chunk), limit_blas=False):
+            pass
         return face, closest, distance
+
+    def _nearest(self, chunk: np.ndarray):
+        """:meth:`nearest` of one batch of queries (m, 3)."""
+        k = min(CANDIDATE_FACES, len(self.faces))
+        centre_distance, candidates = self.tree.query(chunk, k=k)
+        centre_distance, candidates = centre_distance.reshape(len(chunk), k), candidates.reshape(len(chunk), k)
+        first = self._closest(chunk, candidates[:, 0])
+        first_gap = np.linalg.norm(first - chunk, axis=1)
+        beaten = centre_distance[:, 1:] - self.radius[candidates[:, 1:]] < first_gap[:, None]
+        rows, columns = np.nonzero(beaten)
+        found = self._closest(chunk[rows], candidates[rows, columns + 1])
+        gaps = np.linalg.norm(found - chunk[rows], axis=1)
+        nearer = gaps < first_gap[rows]
+        # Written farthest first, so that each row keeps its nearest, the first candidate of equal ones.
+        measured = np.flatnonzero(nearer)
+        order = measured[np.lexsort((-columns[measured], -gaps[measured]))]
+        best_face, best_point, best_gap = candidates[:, 0].copy(), first, first_gap
+        best_face[rows[order]] = candidates[rows[order], columns[order] + 1]
+        best_point[rows[order]] = found[order]
+        best_gap[rows[order]] = gaps[order]
+        return best_face, best_point, best_gap
 
     def _closest(self, points: np.ndarray, faces: np.ndarray) -> np.ndarray:
         """Closest point (m, 3) to each of ``points`` (m, 3) on the triangle ``faces`` (m,) of the surface."""
