@@ -17,7 +17,7 @@ from .mesh_quantities import mean_spacing
 from .parallel import WORKERS, blockwise
 
 CANDIDATE_FACES = 16  # nearest triangle centroids searched per query point
-QUERY_CHUNK = 20000  # queries per batch: bounds memory to about 100 MB
+QUERY_CHUNK = 20000  # queries per batch: about 100 MB of temporaries each, one batch per core at a time
 PARALLEL_QUERIES = 1000  # the fewest queries a batch on a core of its own (see TriangleSurface.nearest)
 
 
