@@ -325,8 +325,10 @@ def test_automatic_pairs_that_leave_the_output_asymmetric_say_so(remeshed_cow):
 @pytest.mark.corpus
 def test_a_posed_dog_whose_automatic_pairs_fail_is_not_silent():
     """On public ground truth (the BCICP dataset, read in place; skipped without it): TOSCA's dog10, which no map
-    of space mirrors (its automatic output keeps 2.6x the error of 100 ground-truth landmark pairs), is warned
-    that it rests on the intrinsic mirror and that little of its map is confident; dog7, whose hind leg the maps
+    of space mirrors (its automatic output keeps 2.5x the error of 100 ground-truth landmark pairs), is warned
+    that it rests on the intrinsic mirror, and that little of its map is confident or that its output is left
+    asymmetric (its confident share sits at the 80 % bound: 80 % before the torn pieces were mended, 81 % after,
+    the second warning naming the same fix); dog7, whose hind leg the maps
     of space once left unrestored (4.5x), is now followed (0.8x: the intrinsic mirror chosen among ten) and, like
     dog3 (1.1x), not warned at all. Silent only where the result is about as good as the landmarks'."""
     import sys
@@ -351,6 +353,7 @@ def test_a_posed_dog_whose_automatic_pairs_fail_is_not_silent():
             assert ratio > 1.5
             assert any(w.startswith("no map of space mirrors enough of this shape; it was paired by its intrinsic "
                                     "mirror") for w in said)
-            assert any(re.match(r"only \d+% of the surface has a confident mirror twin", w) for w in said)
+            assert any(re.match(r"only \d+% of the surface has a confident mirror twin", w)
+                       or w.startswith("the automatic pairs left the output asymmetric") for w in said)
         else:
             assert ratio < 1.5 and said == []

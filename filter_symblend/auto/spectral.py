@@ -328,11 +328,16 @@ def reversed_share(points: np.ndarray, faces: np.ndarray, reversed_there: np.nda
     return float(area[reversed_there].sum() / area.sum())
 
 
+def _edges(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, float]:
+    """(the edges (3f, 2) of ``faces`` (f, 3), each once per triangle side; their median length)."""
+    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    return edges, float(np.median(np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1)))
+
+
 def continuous_part(points: np.ndarray, faces: np.ndarray, vertex_map: np.ndarray, mass: np.ndarray) -> np.ndarray:
     """(n,) bool: the vertices of the largest piece (by ``mass`` (n,)) of the mesh cut along the edges the
     vertex map (n,) tears (:data:`TEAR`), whose twins lie in that piece too."""
-    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    length = np.median(np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1))
+    edges, length = _edges(points, faces)
     torn = np.linalg.norm(points[vertex_map[edges[:, 0]]] - points[vertex_map[edges[:, 1]]], axis=1) > TEAR * length
     kept = edges[~torn]
     whole = sparse.coo_matrix((np.ones(len(kept)), (kept[:, 0], kept[:, 1])), shape=(len(points), len(points)))
@@ -350,6 +355,38 @@ def mirrored_share(points: np.ndarray, faces: np.ndarray, vertex_map: np.ndarray
     return reversed_share(points, faces, reversed_triangles(points, faces, vertex_map) & inside[faces].all(axis=1))
 
 
+def mended_map(points: np.ndarray, faces: np.ndarray, vertex_map: np.ndarray, others: np.ndarray,
+               mass: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(the vertex map (n,) ``vertex_map`` with each piece of the mesh outside its continuous part
+    (:func:`continuous_part`; the pieces that part leaves, each connected) mapped as the row of ``others``
+    (m, n) that joins the part there, the row each vertex's twin came from (n,), -1 where unchanged).
+
+    A limb mapped onto itself, beside a body mapped across, tears at the joint; another candidate may send it
+    across. The row that joins is the one whose twins of the piece's border vertices land within TEAR edges of
+    the twins of their neighbours in the part (the map's own) on more of the border's edges than any other
+    row, and on more than half of them: a map is continuous there. Pieces with fewer than three border edges
+    are left as they are."""
+    edges, length = _edges(points, faces)
+    part = continuous_part(points, faces, vertex_map, mass)
+    outside = ~part
+    n = len(points)
+    within = edges[outside[edges[:, 0]] & outside[edges[:, 1]]]
+    _, piece = connected_components(sparse.coo_matrix((np.ones(len(within)), (within[:, 0], within[:, 1])),
+                                                      shape=(n, n)), directed=False)
+    border = edges[outside[edges[:, 0]] & part[edges[:, 1]]]  # (vertex outside, its neighbour in the part)
+    owner, pieces = piece[border[:, 0]], piece.max() + 1
+    edges_of = np.bincount(owner, minlength=pieces)
+    joins = np.array([np.bincount(owner, minlength=pieces, weights=np.linalg.norm(
+        points[row[border[:, 0]]] - points[vertex_map[border[:, 1]]], axis=1) <= TEAR * length) for row in others])
+    best = np.argmax(joins, axis=0)  # (pieces,)
+    taken = (2 * joins[best, np.arange(pieces)] > edges_of) & (edges_of >= 3)
+    source = np.where(outside & taken[piece], best[piece], -1)
+    mended = vertex_map.copy()
+    changed = source >= 0
+    mended[changed] = others[source[changed], np.flatnonzero(changed)]
+    return mended, source
+
+
 def descriptor_disagreement(signatures: np.ndarray, vertex_map: np.ndarray) -> float:
     """median |log s(x) - log s(m(x))| / median |log s(x) - log s(y)| over random pairs (x, y): 0 for a map
     that keeps the signatures ``signatures`` (n, d) > 0, about 1 for a random map."""
@@ -363,7 +400,8 @@ class CandidateMirror:
     """The intrinsic mirror from a first functional map on ``start`` eigenfunctions, refined by ZoomOut to
     ``size`` eigenfunctions: ``vertex_map`` (n,), its ``descriptor_disagreement``
     (:func:`descriptor_disagreement`) and ``mirrored_share`` (:func:`mirrored_share`); ``refitted_from``: the
-    candidate whose continuous part the first functional map was fitted on (:data:`REFIT_START`), if any."""
+    candidate whose continuous part the first functional map was fitted on (:data:`REFIT_START`), if any;
+    ``mended_from``: the candidates that map the pieces it tore off (:func:`mended_map`), if any."""
 
     start: int
     size: int
@@ -371,12 +409,15 @@ class CandidateMirror:
     descriptor_disagreement: float
     mirrored_share: float
     refitted_from: str | None = None
+    mended_from: tuple[str, ...] = ()
 
     @property
     def name(self) -> str:
         """The candidate's name in reports: its first size and its ZoomOut size ("12 -> 100")."""
         name = f"{self.start} -> {self.size}"
-        return name if self.refitted_from is None else f"{name} on the continuous part of {self.refitted_from}"
+        if self.refitted_from is not None:
+            name = f"{name} on the continuous part of {self.refitted_from}"
+        return name if not self.mended_from else f"{name}, its torn pieces as {' and '.join(self.mended_from)}"
 
     @property
     def keeps_descriptors(self) -> bool:
@@ -402,9 +443,11 @@ def candidate_mirrors(mesh: WorkingMesh, config: AutoConfig) -> list[CandidateMi
     sample = SpectralSample.of(mesh.points, basis.mass)
     tasks = [(start, size, step) for size, step in steps.items() for start in STARTS if start + 2 <= size]
 
-    def scored(start: int, size: int, vertex_map: np.ndarray, refitted_from: str | None = None) -> CandidateMirror:
+    def scored(start: int, size: int, vertex_map: np.ndarray, refitted_from: str | None = None,
+               mended_from: tuple[str, ...] = ()) -> CandidateMirror:
         return CandidateMirror(start, size, vertex_map, descriptor_disagreement(signatures, vertex_map),
-                               mirrored_share(mesh.points, mesh.faces, vertex_map, basis.mass), refitted_from)
+                               mirrored_share(mesh.points, mesh.faces, vertex_map, basis.mass), refitted_from,
+                               mended_from)
 
     def candidate(task: tuple[int, int, int]) -> CandidateMirror:
         start, size, step = task
@@ -419,6 +462,19 @@ def candidate_mirrors(mesh: WorkingMesh, config: AutoConfig) -> list[CandidateMi
         vertex_map = refit(sizes[mirror.size], mirror.vertex_map, part, start, steps[mirror.size], sample)
         return scored(start, mirror.size, vertex_map, mirror.name)
 
+    def mended(mirrors: list[CandidateMirror]) -> list[CandidateMirror]:
+        """The best of ``mirrors`` with the pieces it tears off mapped by the others (:func:`mended_map`), if any."""
+        best, others = mirrors[0], mirrors[1:]
+        if not others:
+            return []
+        vertex_map, source = mended_map(mesh.points, mesh.faces, best.vertex_map,
+                                        np.array([mirror.vertex_map for mirror in others]), basis.mass)
+        if not (source >= 0).any():
+            return []
+        return [scored(best.start, best.size, vertex_map, best.refitted_from,
+                       tuple(others[index].name for index in np.unique(source[source >= 0])))]
+
     by_share = lambda mirrors: sorted(mirrors, key=lambda mirror: -mirror.mirrored_share)  # noqa: E731
     found = by_share(in_threads(candidate, tasks))  # one per core: 3.4 -> 2.2 s on a 5k horse, 2 cores
-    return by_share(found + list(in_threads(refitted, found[:REFITTED])))
+    found = by_share(found + list(in_threads(refitted, found[:REFITTED])))
+    return by_share(found + mended(found))
