@@ -326,14 +326,15 @@ def test_a_patch_a_map_sends_onto_itself_is_mapped_by_the_candidate_that_joins_t
 
 
 def test_a_patch_no_candidate_joins_is_left_as_it_is():
-    """Neither the identity nor a map of another patch onto itself lands beside the twins of the patch's border:
-    nothing is replaced."""
+    """The identity does not land beside the twins of the patch's border (and with no other candidate there is
+    nothing to take): nothing is replaced."""
     points, faces, exact, folded, patch = _blob_with_a_patch_mapped_onto_itself()
     _, mass = cotangent_laplacian(points, faces)
     identity = np.arange(len(points))
-    mended, source = mended_map(points, faces, folded, identity[None], mass)
-    np.testing.assert_array_equal(mended, folded)
-    assert (source == -1).all()
+    for others in (identity[None], np.empty((0, len(points)), dtype=np.int64)):  # one that does not join; none
+        mended, source = mended_map(points, faces, folded, others, mass)
+        np.testing.assert_array_equal(mended, folded)
+        assert (source == -1).all()
 
 
 @pytest.mark.corpus

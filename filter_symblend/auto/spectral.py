@@ -357,19 +357,21 @@ def mirrored_share(points: np.ndarray, faces: np.ndarray, vertex_map: np.ndarray
 
 def mended_map(points: np.ndarray, faces: np.ndarray, vertex_map: np.ndarray, others: np.ndarray,
                mass: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(the vertex map (n,) ``vertex_map`` with each piece of the mesh outside its continuous part
-    (:func:`continuous_part`; the pieces that part leaves, each connected) mapped as the row of ``others``
-    (m, n) that joins the part there, the row each vertex's twin came from (n,), -1 where unchanged).
+    """(``vertex_map`` (n,) with each connected piece of the mesh outside its continuous part
+    (:func:`continuous_part`) mapped as the row of ``others`` (m, n) that joins the part there; for each vertex,
+    the row its new twin came from (n,), -1 where it kept its own).
 
     A limb mapped onto itself, beside a body mapped across, tears at the joint; another candidate may send it
     across. The row that joins is the one whose twins of the piece's border vertices land within TEAR edges of
     the twins of their neighbours in the part (the map's own) on more of the border's edges than any other
     row, and on more than half of them: a map is continuous there. Pieces with fewer than three border edges
     are left as they are."""
+    n = len(points)
+    if not len(others):
+        return vertex_map.copy(), np.full(n, -1)
     edges, length = _edges(points, faces)
     part = continuous_part(points, faces, vertex_map, mass)
     outside = ~part
-    n = len(points)
     within = edges[outside[edges[:, 0]] & outside[edges[:, 1]]]
     _, piece = connected_components(sparse.coo_matrix((np.ones(len(within)), (within[:, 0], within[:, 1])),
                                                       shape=(n, n)), directed=False)
@@ -427,9 +429,9 @@ class CandidateMirror:
 
 def candidate_mirrors(mesh: WorkingMesh, config: AutoConfig) -> list[CandidateMirror] | None:
     """The intrinsic mirror of ``mesh`` from each first size of STARTS that its spectrum allows, refined by
-    ZoomOut to each size of ``config.zoomout_sizes``, and the REFITTED best of them refitted on their continuous
-    parts, by decreasing mirrored share (:func:`mirrored_share`: the best first); None if the spectrum cannot be
-    computed."""
+    ZoomOut to each size of ``config.zoomout_sizes``, the REFITTED best of them refitted on their continuous
+    parts, and the best of all with the pieces it tears off mapped by the others (:func:`mended_map`), by
+    decreasing mirrored share (:func:`mirrored_share`: the best first); None if the spectrum cannot be computed."""
     basis = eigenbasis(mesh.points, mesh.faces, max(size for size, _ in config.zoomout_sizes))
     if basis is None:
         return None
@@ -465,8 +467,6 @@ def candidate_mirrors(mesh: WorkingMesh, config: AutoConfig) -> list[CandidateMi
     def mended(mirrors: list[CandidateMirror]) -> list[CandidateMirror]:
         """The best of ``mirrors`` with the pieces it tears off mapped by the others (:func:`mended_map`), if any."""
         best, others = mirrors[0], mirrors[1:]
-        if not others:
-            return []
         vertex_map, source = mended_map(mesh.points, mesh.faces, best.vertex_map,
                                         np.array([mirror.vertex_map for mirror in others]), basis.mass)
         if not (source >= 0).any():
