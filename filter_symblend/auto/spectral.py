@@ -40,7 +40,7 @@ from scipy.sparse.linalg import ArpackNoConvergence, eigsh
 from scipy.spatial import cKDTree
 
 from ..core.geometry import voxel_grid
-from ..core.mesh_graph import vertex_adjacency
+from ..core.mesh_graph import triangle_sides, vertex_adjacency
 from ..core.mesh_quantities import farthest_point_order
 from ..core.parallel import in_threads
 from .config import AutoConfig
@@ -329,8 +329,8 @@ def reversed_share(points: np.ndarray, faces: np.ndarray, reversed_there: np.nda
 
 
 def _edges(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, float]:
-    """(the edges (3f, 2) of ``faces`` (f, 3), each once per triangle side; their median length)."""
-    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    """(the sides of the triangles ``faces`` (f, 3), (3f, 2): :func:`triangle_sides`; their median length)."""
+    edges = triangle_sides(faces)
     return edges, float(np.median(np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1)))
 
 

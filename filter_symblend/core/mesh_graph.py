@@ -8,9 +8,15 @@ import numpy as np
 import scipy.sparse as sparse
 
 
+def triangle_sides(faces: np.ndarray) -> np.ndarray:
+    """(3F, 2) the sides of the triangles ``faces`` (F, 3) as vertex pairs, each once per triangle (an edge
+    shared by two triangles twice, once each way on a consistently oriented mesh)."""
+    return np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+
+
 def vertex_adjacency(faces: np.ndarray, count: int) -> sparse.csr_matrix:
     """Symmetric (count, count) 0/1 matrix of the mesh edges of ``faces`` (F, 3)."""
-    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    edges = triangle_sides(faces)
     edges = np.concatenate([edges, edges[:, ::-1]])
     adjacency = sparse.csr_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(count, count))
     adjacency.data[:] = 1.0  # an edge shared by two triangles was summed twice
