@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import dataclasses
 
+from ..measures.verdict import PART_LEFT_ASYMMETRIC
+
 
 def _field(default, unit: str, reason: str):
     return dataclasses.field(default=default, metadata={"unit": unit, "reason": reason})
@@ -85,12 +87,13 @@ class AutoConfig:
         1e-9, "x bounding-box diagonal",
         "positions closer than this are one position (rounding); also the least precision a map is asked for")
     part_left_asymmetric: float = _field(
-        0.02, "x bounding-box diagonal",
+        PART_LEFT_ASYMMETRIC, "x bounding-box diagonal",
         "in articulated mode, an output from a map of space whose 99th percentile of distance to its own "
         "reflection exceeds this has a part left asymmetric (a limb no smooth map followed), and the intrinsic "
         "start is tried too: about the geometric middle (1.8 %) of the remeshed cow's unrestored swung legs "
         "(3.2 and 8.3 %) and the restored bends and legs of it and of spot (at most 1.0 %); checked on the BCICP "
-        "shapes paired by maps of space (sound: at most 1.6 %; four TOSCA dogs above it, 4.5-12.5 %)")
+        "shapes paired by maps of space (sound: at most 1.6 %; four TOSCA dogs above it, 4.5-12.5 %). The "
+        "before/after checks warn of an output left so by the same bound (measures/verdict)")
     spectral_vertices: int = _field(
         6000, "vertices",
         "the intrinsic mirror is computed on a mesh of at most about this many vertices (larger ones are "
