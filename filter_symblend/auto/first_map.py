@@ -95,18 +95,16 @@ def tessellation_map(surface: Surface, maps: list[MirrorMap], sources: np.ndarra
     return None
 
 
-def smoothed_coverage(mirror: MirrorMap, sources: np.ndarray, config: AutoConfig) -> float:
-    """The share of the ``sources`` (m,) that a mirror field fitted through ``mirror``'s twins of the screening
-    vertices, at the finest width, mirrors: the geometric score of a vertex map, whose own share says little (its
-    twins are vertices, on the surface and mutual by construction). A tessellation that mirrors itself across a
-    plane the shape does not fails it where the parts it swaps differ (a bent body of revolution carrying a knob
-    and a ridge: 95 %); the shape's own mirror, bent, compressed or posed, passes (96-100 %)."""
-    surface = mirror.surface
-    screening = _strided(surface, config.screening_samples)
-    x = surface.points[screening]
-    field = robust_fit(x, mirror.predict(x), field_centres(surface, screening, config.screening_centres),
-                       config.field_widths[-1] * surface.diagonal)
-    return coverage(field_map(surface, field, mirror.name), sources, config)
+def smoothed_coverage(mirror: MirrorMap, x: np.ndarray, centres: np.ndarray, sources: np.ndarray,
+                      config: AutoConfig) -> float:
+    """The share of the ``sources`` (m,) that a mirror field on ``centres`` (c, 3), fitted through ``mirror``'s
+    twins of the positions ``x`` (s, 3) at the finest width, mirrors: the geometric score of a vertex map, whose
+    own share says little (its twins are vertices, on the surface and mutual by construction). A tessellation that
+    mirrors itself across a plane the shape does not fails it where the parts it swaps differ (a bent body of
+    revolution carrying a knob and a ridge: 95 %); the shape's own mirror, bent, compressed or posed, passes
+    (96-100 %)."""
+    field = robust_fit(x, mirror.predict(x), centres, config.field_widths[-1] * mirror.surface.diagonal)
+    return coverage(field_map(mirror.surface, field, mirror.name), sources, config)
 
 
 INTRINSIC = "intrinsic mirror"  # the names of the intrinsic mirror's map and of the whitened shape's
@@ -237,15 +235,15 @@ def _candidates(surface: Surface, planes: list, search: _Search, config: AutoCon
     search.rigid = rigid
     yield rigid
     ranked = sorted(rigid, key=lambda mirror: -search.shares[mirror.name])
+    screening = _strided(surface, config.screening_samples)  # the sample every field is fitted and registered on
+    x = surface.points[screening]
+    centres = field_centres(surface, screening, config.screening_centres)
     mirrored = tessellation_map(surface, ranked[:2], search.scored, config)
-    if mirrored is not None and smoothed_coverage(mirrored, search.scored, config) >= config.field_suffices:
+    if mirrored is not None and smoothed_coverage(mirrored, x, centres, search.scored, config) >= config.field_suffices:
         yield [mirrored]  # the tessellation mirrors itself as the shape does: its own mirror, exact whatever the bend
         return
     search.begin_intrinsic(surface, ranked[0].normal)  # no plane suffices: a candidate, and an opinion on each twin
-    screening = _strided(surface, config.screening_samples)
-    x = surface.points[screening]
     coarse = config.field_widths[0] * surface.diagonal
-    centres = field_centres(surface, screening, config.screening_centres)
 
     def registered(name: str, twins: np.ndarray) -> list[MirrorMap]:
         if progress is not None:
