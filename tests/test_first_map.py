@@ -69,3 +69,39 @@ def test_a_compressed_shape_whose_whitened_plane_mirrors_most_has_the_whitened_s
     assert whitened <= set(compressed) and len(drifts) == 2 and not (whitened | drifts) & set(posed)
     assert set(posed) | whitened | drifts == set(compressed)
     assert compressed[found.map.name] == max(compressed.values())
+
+
+@pytest.mark.corpus
+def test_on_a_posed_body_a_sound_intrinsic_mirror_is_chosen_over_a_field_that_mirrors_more(monkeypatch):
+    """On public ground truth (the BCICP dataset, read in place; skipped without it): FAUST's tr_reg_055. A field
+    registered from the best plane mirrors more of the surface than the intrinsic mirror (measured 98 % against
+    94 %) but slides along it (93 % of the published twins within 0.05 sqrt(area)); on a posed body the intrinsic
+    mirror, sound itself, is chosen (98 % of its twins right). In any other mode the field that mirrors the most is
+    chosen, as before."""
+    import sys
+    from pathlib import Path
+
+    import numpy as np
+
+    from filter_symblend.auto import first_map as module
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+    from benchmarks.mirror_maps import find_dataset, surface_area, twin_errors
+    dataset = find_dataset(None)
+    if dataset is None:
+        pytest.skip("the BCICP dataset is absent (fetch llorz/SGA18_orientation_BCICP_dataset, or $BCICP_DATASET)")
+    points, faces, a, b = dataset.shape("FAUST", "tr_reg_055")
+    made = {}
+    score = module._Search.score
+    monkeypatch.setattr(module._Search, "score", lambda search, mirror: (made.__setitem__(mirror.name, mirror),
+                                                                          score(search, mirror))[1])
+    surface = build_surface(points, faces)
+    scored = spread(points, surface.usable_index, DEFAULT.score_samples)
+    found = first_map(surface, scored, DEFAULT, compression=False)
+    shares = _maps(found.shares)
+    scale = np.sqrt(surface_area(points, faces))
+    right = {name: float(np.mean(twin_errors(mirror.predict(points), points, a, b, scale) <= 0.05))
+             for name, mirror in made.items()}
+    print({name: (round(shares[name], 3), round(right[name], 3)) for name in shares})
+    most = max(shares, key=shares.get)
+    assert found.map.name == "intrinsic mirror" and "registration" in most and shares[most] > shares[found.map.name]
+    assert right[found.map.name] >= 0.97 and right[most] <= right[found.map.name] - 0.03

@@ -33,7 +33,9 @@ The intrinsic mirror is a candidate of every shape no plane mirrors, even when a
 (it is computed anyway: its opinion on each twin is kept, :func:`.confidence.mirror_pairs`), in a thread beside
 the fields from the moment no plane suffices. A registered field that mirrors ``min_coverage`` must also do so
 within ``field_precision`` of the tolerance, unless a plain map mirrors that much (a field fitted onto any
-surface lands much of it somewhere: 80 % of a bunny).
+surface lands much of it somewhere: 80 % of a bunny). On a posed body a registered field chosen so gives way to the
+intrinsic mirror when the intrinsic mirror passes the same two tests itself (:func:`_intrinsic_if_sound`: a field can
+slide along the surface, an isometry pairs vertex with vertex).
 """
 
 from __future__ import annotations
@@ -323,8 +325,25 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, compress
     # A plain map that mirrors min_coverage shows a symmetry up to the scan's noise; else the field must
     # prove it within its own precision.
     best = _refuse_or(best, search.shares, config, None if rigid_share >= config.min_coverage else scored)
+    if not compression:
+        best = _intrinsic_if_sound(best, search, config)
     rivals = close_rivals(best, list(search.maps.values()), search.shares, scored, config)
     return FirstMap(best, search.shares, planes[0], rivals, search.intrinsic)
+
+
+def _intrinsic_if_sound(best: MirrorMap, search: _Search, config: AutoConfig) -> MirrorMap:
+    """On a posed body, the intrinsic mirror in place of a registered field (``best``) when it is sound itself: it
+    mirrors ``min_coverage`` of the surface, and ``precise_coverage`` within ``field_precision`` of the landing
+    tolerance (what a field must show before it is trusted). An isometry of the surface pairs vertex with vertex; a
+    registered field lands on the surface but may slide along it, which its share cannot see and the rounds do not
+    undo: on the 40 BCICP shapes, wherever a field mirrored more than the intrinsic mirror, the intrinsic mirror's
+    twins were as right or righter (docs/benchmarks.md). A plane or the tessellation's own mirror stays."""
+    intrinsic = search.intrinsic
+    if intrinsic is None or best.name not in search.fields or search.shares[intrinsic.name] < config.min_coverage:
+        return best
+    if coverage(intrinsic, search.scored, config, config.field_precision) < config.precise_coverage:
+        return best
+    return intrinsic
 
 
 def _refuse_or(best: MirrorMap, shares: dict, config: AutoConfig, scored: np.ndarray | None = None) -> MirrorMap:
