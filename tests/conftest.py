@@ -16,6 +16,21 @@ from filter_symblend.testing.surface_truth import SurfaceTruth
 
 SAMPLE_MESHES = pathlib.Path(pymeshlab.__file__).parent / "tests" / "sample_meshes"
 SHARED_DATA = pathlib.Path(__file__).resolve().parents[1].parent / "shared" / "data"
+SCRIPTS = pathlib.Path(__file__).resolve().parents[1] / "scripts"  # the benchmarks' helpers (benchmarks.mirror_maps)
+
+
+@pytest.fixture
+def bcicp():
+    """The BCICP dataset's FAUST and TOSCA shapes with their ground-truth self-symmetry, read in place by the
+    mirror-map benchmark's loader (``benchmarks.mirror_maps`` importable from then on); skips the test without it."""
+    import sys
+    if str(SCRIPTS) not in sys.path:
+        sys.path.insert(0, str(SCRIPTS))
+    from benchmarks.mirror_maps import find_dataset
+    dataset = find_dataset(None)
+    if dataset is None:
+        pytest.skip("the BCICP dataset is absent (fetch llorz/SGA18_orientation_BCICP_dataset, or $BCICP_DATASET)")
+    return dataset
 
 
 @dataclasses.dataclass

@@ -366,19 +366,13 @@ def test_a_patch_no_candidate_joins_is_left_as_it_is():
 
 
 @pytest.mark.corpus
-def test_a_posed_mans_feet_mapped_onto_themselves_are_mended_from_a_candidate_that_swaps_them():
+def test_a_posed_mans_feet_mapped_onto_themselves_are_mended_from_a_candidate_that_swaps_them(bcicp):
     """On public ground truth (the BCICP dataset, read in place; skipped without it): TOSCA's david1, legs apart.
     The best intrinsic candidate folds each foot onto itself (83 % of the published twin pairs within 0.05
     sqrt(area), measured); its feet mapped as the candidates that join the legs there, the map mirrors more of the
     surface and is chosen, with 90 % (docs/benchmarks.md)."""
-    import sys
-    from pathlib import Path
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
-    from benchmarks.mirror_maps import find_dataset, surface_area, twin_errors
-    dataset = find_dataset(None)
-    if dataset is None:
-        pytest.skip("the BCICP dataset is absent (fetch llorz/SGA18_orientation_BCICP_dataset, or $BCICP_DATASET)")
-    points, faces, a, b = dataset.shape("TOSCA", "david1")
+    from benchmarks.mirror_maps import surface_area, twin_errors
+    points, faces, a, b = bcicp.shape("TOSCA", "david1")
     mesh = working_mesh(points, faces, np.ones(len(points), dtype=bool), AutoConfig())
     assert len(mesh.points) == len(points)  # no coarsening: the working mesh is the shape
     mirrors = candidate_mirrors(mesh, AutoConfig())

@@ -379,7 +379,7 @@ def test_a_part_whose_twin_is_broken_off_is_said(cow):
 
 
 @pytest.mark.corpus
-def test_a_posed_dog_whose_automatic_pairs_fail_is_not_silent():
+def test_a_posed_dog_whose_automatic_pairs_fail_is_not_silent(bcicp):
     """On public ground truth (the BCICP dataset, read in place; skipped without it): TOSCA's dog10, which no map
     of space mirrors (its automatic output keeps 2.5x the error of 100 ground-truth landmark pairs), is warned
     that it rests on the intrinsic mirror, and that little of its map is confident or that its output is left
@@ -387,15 +387,9 @@ def test_a_posed_dog_whose_automatic_pairs_fail_is_not_silent():
     the second warning naming the same fix); dog7, whose hind leg the maps
     of space once left unrestored (4.5x), is now followed (0.8x: the intrinsic mirror chosen among ten) and, like
     dog3 (1.1x), not warned at all. Silent only where the result is about as good as the landmarks'."""
-    import sys
-    from pathlib import Path
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
-    from benchmarks.mirror_maps import find_dataset, landmark_output, symmetry_error
-    dataset = find_dataset(None)
-    if dataset is None:
-        pytest.skip("the BCICP dataset is absent (fetch llorz/SGA18_orientation_BCICP_dataset, or $BCICP_DATASET)")
+    from benchmarks.mirror_maps import landmark_output, symmetry_error
     for name, warned in (("dog10", True), ("dog7", False), ("dog3", False)):
-        points, faces, a, b = dataset.shape("TOSCA", name)
+        points, faces, a, b = bcicp.shape("TOSCA", name)
         ms = pymeshlab.MeshSet()
         ms.add_mesh(pymeshlab.Mesh(points, faces))
         with warnings.catch_warnings():

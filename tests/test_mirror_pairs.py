@@ -380,17 +380,11 @@ def test_a_map_wrong_on_much_of_the_surface_warns_with_the_share_and_the_fix(rem
 
 
 @pytest.mark.corpus
-def test_the_map_of_a_tosca_man_is_the_published_self_symmetry():
+def test_the_map_of_a_tosca_man_is_the_published_self_symmetry(bcicp):
     """On public ground truth (the BCICP dataset, read in place; skipped without it): TOSCA's david0, a man at
     rest, remeshed to 5,000 vertices. Its twins are the published mirror twins, nearly all of them confident."""
-    import sys
-    from pathlib import Path
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
-    from benchmarks.mirror_maps import find_dataset, surface_area, twin_errors
-    dataset = find_dataset(None)
-    if dataset is None:
-        pytest.skip("the BCICP dataset is absent (fetch llorz/SGA18_orientation_BCICP_dataset, or $BCICP_DATASET)")
-    points, faces, a, b = dataset.shape("TOSCA", "david0")
+    from benchmarks.mirror_maps import surface_area, twin_errors
+    points, faces, a, b = bcicp.shape("TOSCA", "david0")
     pairs = find_mirror_pairs(points, faces, mode="articulated")
     twin, confidence = pairs.per_vertex()
     errors = twin_errors(twin, points, a, b, np.sqrt(surface_area(points, faces)))
