@@ -47,11 +47,10 @@ def test_a_remeshed_deformed_cow_comes_back_more_symmetric_than_100_landmarks_ma
     assert 0.5 < report.consistency <= 1.0
     # The reported twins (each vertex's, with its confidence): the registered field's confident twins stand against
     # the intrinsic mirror's coarser opinion (which, allowed over them, put 4 % of the bent cow's twins 1 % off).
-    twin, confidence = automatic.mirror_pairs.per_vertex()
-    off = np.linalg.norm(twin[truth.left] - truth.twins(deformed), axis=1) / np.linalg.norm(np.ptp(deformed, axis=0))
+    off, confidence = _reported_twins_off(automatic, truth, deformed)
     print("reported twins within 1 % of the diagonal:", np.mean(off < 0.01))
     assert np.mean(off < 0.01) > 0.97
-    assert np.mean((confidence[truth.left] >= 0.5) & (off > 0.02)) < 0.005
+    assert np.mean((confidence >= 0.5) & (off > 0.02)) < 0.005
 
 
 def test_the_whitened_shapes_intrinsic_mirror_survives_a_compression_that_breaks_the_shapes_own(remeshed_cow):
@@ -83,7 +82,8 @@ def test_the_whitened_shapes_intrinsic_mirror_survives_a_compression_that_breaks
 def test_the_paper_figure_1_map_on_remeshed_spot_is_paired_by_the_whitened_shapes_intrinsic_mirror():
     """Spot remeshed, bent 1.2 rad and compressed to 65 % obliquely (the paper's Figure 1 map): every map of space
     slides a third of the twins by 4-12 % of the diagonal, and so did the intrinsic mirror, until the whitened
-    shape's was a candidate (9.4x the symmetry error 100 landmarks leave, now 2.5x: docs/benchmarks.md)."""
+    shape's was a candidate (9.4x the symmetry error 100 landmarks leave, then 2.6x, 1.3x since the winning field's
+    registration runs until its slide is spent: docs/benchmarks.md)."""
     truth = remeshed_ground_truth(SHARED_DATA / "spot.obj", 2.0)
     deformed = synthetic.random_rigid(synthetic.figure_1_deformation(truth.points), seed=7)
     automatic = symmetrize(deformed, faces=truth.faces, pairs="auto", mode="affine")
@@ -92,7 +92,31 @@ def test_the_paper_figure_1_map_on_remeshed_spot_is_paired_by_the_whitened_shape
     print("Figure 1, symmetry error input / auto / 100 landmarks:", errors)
     assert automatic.report.auto_pairs.coverage["registration from the intrinsic mirror of the whitened shape"] \
         == max(share for name, share in automatic.report.auto_pairs.coverage.items() if not name.endswith("%"))
-    assert errors[1] < 3.0 * errors[2]
+    assert errors[1] < 1.6 * errors[2]
+
+
+def _reported_twins_off(result, truth, points) -> tuple[np.ndarray, np.ndarray]:
+    """(distance of each true left vertex's reported twin from its true twin / diagonal, its confidence)."""
+    twin, confidence = result.mirror_pairs.per_vertex()
+    off = np.linalg.norm(twin[truth.left] - truth.twins(points), axis=1) / np.linalg.norm(np.ptp(points, axis=0))
+    return off, confidence[truth.left]
+
+
+def test_the_paper_figure_1_map_on_the_remeshed_cow_is_paired_once_the_fields_slide_is_spent(remeshed_cow):
+    """The remeshed cow under Figure 1's map: the winning field lands on the surface in a few steps of its
+    registration and then slides along it toward the true twins. Stopped after 10 steps a width it left a fifth of
+    the twins more than 1 % of the diagonal off, 4 % of them confident (silent), and the output 1.7x as asymmetric as
+    100 landmarks leave it; registered 30 (``registration_iterations``) it pairs 97 % (docs/benchmarks.md)."""
+    truth = remeshed_cow
+    deformed = synthetic.random_rigid(synthetic.figure_1_deformation(truth.points), seed=7)
+    automatic = symmetrize(deformed, faces=truth.faces, pairs="auto", mode="affine")
+    alone = _landmarks_alone(deformed, *truth.landmarks(100), "affine")
+    off, confidence = _reported_twins_off(automatic, truth, deformed)
+    errors = [truth.symmetry_error(p) for p in (automatic.points, alone.points)]
+    print("twins within 1 %:", np.mean(off < 0.01), "symmetry error auto / 100 landmarks:", errors)
+    assert np.mean(off < 0.01) > 0.95
+    assert np.mean((confidence >= 0.5) & (off > 0.02)) < 0.01
+    assert errors[0] < errors[1]
 
 
 def test_a_remeshed_cow_bent_strongly_is_not_refused(remeshed_cow):
