@@ -339,38 +339,51 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, compress
 
 
 def _intrinsic_if_sound(best: MirrorMap, search: _Search, config: AutoConfig) -> MirrorMap:
-    """On a posed body, the intrinsic mirror in place of a registered field (``best``) when it is sound itself: it
-    mirrors ``min_coverage`` of the surface, and ``precise_coverage`` within ``field_precision`` of the landing
-    tolerance (what a field must show before it is trusted). An isometry of the surface pairs vertex with vertex; a
-    registered field lands on the surface but may slide along it, which its share cannot see and the rounds do not
-    undo: on the 40 BCICP shapes, wherever a field mirrored more than the intrinsic mirror, the intrinsic mirror's
-    twins were as right or righter (docs/benchmarks.md). A plane or the tessellation's own mirror stays."""
+    """On a posed body, the intrinsic mirror in place of a registered field (``best``) when it passes the tests a
+    field must pass itself (:func:`_soundness`). An isometry of the surface pairs vertex with vertex; a registered
+    field lands on the surface but may slide along it, which its share cannot see and the rounds do not undo: on the
+    40 BCICP shapes, wherever a field mirrored more than the intrinsic mirror, the intrinsic mirror's twins were as
+    right or righter (docs/benchmarks.md). A plane or the tessellation's own mirror stays."""
     intrinsic = search.intrinsic
-    if intrinsic is None or best.name not in search.fields or search.shares[intrinsic.name] < config.min_coverage:
+    if intrinsic is None or best.name not in search.fields:
         return best
-    if coverage(intrinsic, search.scored, config, config.field_precision) < config.precise_coverage:
-        return best
-    return intrinsic
+    return intrinsic if _soundness(intrinsic, search.shares[intrinsic.name], config, search.scored).sound else best
+
+
+class _Soundness(NamedTuple):
+    """A map's ``share`` of the surface mirrored within the landing tolerance and, for a map that lands where it
+    lands by fitting, its ``precise`` share within ``field_precision`` of it (None: not measured); ``sound``: both at
+    least what a mirror-symmetric shape shows (``min_coverage``, ``precise_coverage``)."""
+
+    share: float
+    precise: float | None
+    sound: bool
+
+
+def _soundness(mirror: MirrorMap, share: float, config: AutoConfig, scored: np.ndarray | None) -> _Soundness:
+    """The tests of :class:`_Soundness` for ``mirror``, whose ``share`` is measured; its precise share is measured on
+    the ``scored`` vertices (None: a plain map, whose share shows a symmetry up to the scan's noise) if the share
+    passes."""
+    if share < config.min_coverage or scored is None:
+        return _Soundness(share, None, share >= config.min_coverage)
+    precise = coverage(mirror, scored, config, config.field_precision)
+    return _Soundness(share, precise, precise >= config.precise_coverage)
 
 
 def _refuse_or(best: MirrorMap, shares: dict, config: AutoConfig, scored: np.ndarray | None = None) -> MirrorMap:
-    """``best``, or SymmetryNotFoundError if it mirrors less than ``min_coverage`` of the surface: within the
-    landing tolerance, and for a registered field (which lands where it lands by fitting: give the ``scored``
-    vertices) within ``field_precision`` of it too."""
-    share = shares[best.name]
+    """``best``, or SymmetryNotFoundError if it is not sound (:func:`_soundness`; a registered field, which lands
+    where it lands by fitting, is measured on the ``scored`` vertices too)."""
+    soundness = _soundness(best, shares[best.name], config, scored)
     listed = ", ".join(f"{name} {value:.0%}" for name, value in shares.items())
-    found = f"mirrors {share:.0%} of the surface within {100 * config.landing_tolerance:g}% of its size"
+    found = f"mirrors {soundness.share:.0%} of the surface within {100 * config.landing_tolerance:g}% of its size"
     needs = f"needs {config.min_coverage:.0%}"
-    refused = share < config.min_coverage
-    if scored is not None and not refused:
+    if soundness.precise is not None:
         tolerance = config.field_precision * config.landing_tolerance
-        precise = shares[f"{best.name}, within {100 * tolerance:g}%"] = coverage(best, scored, config,
-                                                                                 config.field_precision)
-        refused = precise < config.precise_coverage
-        found += (f" but {precise:.0%} within {100 * tolerance:g}%, where a field fitted onto the surface lands "
-                  "on a symmetric shape")
+        shares[f"{best.name}, within {100 * tolerance:g}%"] = soundness.precise
+        found += (f" but {soundness.precise:.0%} within {100 * tolerance:g}%, where a field fitted onto the surface "
+                  "lands on a symmetric shape")
         needs = f"needs {config.precise_coverage:.0%} there"
-    if refused:
+    if not soundness.sound:
         raise SymmetryNotFoundError(
             f"No mirror symmetry found: the best mirror map ({best.name}) {found} ({listed}); a mirror-symmetric "
             f"shape, even bent or compressed, {needs}. Place landmark pairs and use pairs='landmarks' "
