@@ -82,8 +82,8 @@ def test_the_whitened_shapes_intrinsic_mirror_survives_a_compression_that_breaks
 def test_the_paper_figure_1_map_on_remeshed_spot_is_paired_by_the_whitened_shapes_intrinsic_mirror():
     """Spot remeshed, bent 1.2 rad and compressed to 65 % obliquely (the paper's Figure 1 map): every map of space
     slides a third of the twins by 4-12 % of the diagonal, and so did the intrinsic mirror, until the whitened
-    shape's was a candidate (9.4x the symmetry error 100 landmarks leave, then 2.6x, 1.3x since the winning field's
-    registration runs until its slide is spent: docs/benchmarks.md)."""
+    shape's was a candidate (9.4x the symmetry error 100 landmarks leave, then 2.6x, 1.1x since the winning field is
+    let slide along the surface toward its twins: docs/benchmarks.md)."""
     truth = remeshed_ground_truth(SHARED_DATA / "spot.obj", 2.0)
     deformed = synthetic.random_rigid(synthetic.figure_1_deformation(truth.points), seed=7)
     automatic = symmetrize(deformed, faces=truth.faces, pairs="auto", mode="affine")
@@ -92,7 +92,7 @@ def test_the_paper_figure_1_map_on_remeshed_spot_is_paired_by_the_whitened_shape
     print("Figure 1, symmetry error input / auto / 100 landmarks:", errors)
     assert automatic.report.auto_pairs.coverage["registration from the intrinsic mirror of the whitened shape"] \
         == max(share for name, share in automatic.report.auto_pairs.coverage.items() if not name.endswith("%"))
-    assert errors[1] < 1.6 * errors[2]
+    assert errors[1] < 1.4 * errors[2]
 
 
 def _reported_twins_off(result, truth, points) -> tuple[np.ndarray, np.ndarray]:
@@ -104,9 +104,10 @@ def _reported_twins_off(result, truth, points) -> tuple[np.ndarray, np.ndarray]:
 
 def test_the_paper_figure_1_map_on_the_remeshed_cow_is_paired_once_the_fields_slide_is_spent(remeshed_cow):
     """The remeshed cow under Figure 1's map: the winning field lands on the surface in a few steps of its
-    registration and then slides along it toward the true twins. Stopped after 10 steps a width it left a fifth of
-    the twins more than 1 % of the diagonal off, 4 % of them confident (silent), and the output 1.7x as asymmetric as
-    100 landmarks leave it; registered 30 (``registration_iterations``) it pairs 97 % (docs/benchmarks.md)."""
+    registration and then slides along it toward the true twins, as far as the involution term, which holds the
+    images where they are, lets it. Held as firmly as while candidates are compared, it left a fifth of the twins
+    more than 1 % of the diagonal off, 4 % of them confident (silent), and the output 1.7x as asymmetric as 100
+    landmarks leave it; let slide (``field.SLIDING_INVOLUTION_WEIGHT``) it pairs 97 % (docs/benchmarks.md)."""
     truth = remeshed_cow
     deformed = synthetic.random_rigid(synthetic.figure_1_deformation(truth.points), seed=7)
     automatic = symmetrize(deformed, faces=truth.faces, pairs="auto", mode="affine")

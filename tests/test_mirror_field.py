@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from filter_symblend.auto.config import DEFAULT
-from filter_symblend.auto.field import (INVOLUTION_WEIGHT, RIDGE, MirrorField, fit_to_pairs, register, robust_fit,
-                                        robust_tolerance)
+from filter_symblend.auto.field import (INVOLUTION_WEIGHT, RIDGE, SLIDING_INVOLUTION_WEIGHT, MirrorField, fit_to_pairs,
+                                        register, robust_fit, robust_tolerance)
 from filter_symblend.auto.surface import build_surface
 from filter_symblend.core.geometry import reflection_across_plane
 from filter_symblend.testing import synthetic
@@ -41,10 +41,11 @@ def test_the_fit_to_pairs_is_the_dense_weighted_least_squares_of_the_kronecker_s
     np.testing.assert_allclose(field.weights.reshape(-1), expected, rtol=1e-9, atol=1e-12)
 
 
-def test_a_registration_step_solves_the_dense_point_to_plane_and_involution_system():
+@pytest.mark.parametrize("involution", [INVOLUTION_WEIGHT, SLIDING_INVOLUTION_WEIGHT])
+def test_a_registration_step_solves_the_dense_point_to_plane_and_involution_system(involution):
     """One iteration of ``register`` on a surface: its new weights are those of the explicit design matrices,
-    point-to-plane rows (K_i kron n_i^T) and the involution's point-to-point rows (K(y_i) kron I_3) at
-    INVOLUTION_WEIGHT, every row weighted, the unweighted ones included."""
+    point-to-plane rows (K_i kron n_i^T) and the involution's point-to-point rows (K(y_i) kron I_3) at the weight
+    given (the candidates' and the chosen field's), every row weighted, the unweighted ones included."""
     points, faces = synthetic.icosphere(3)
     points = synthetic.bend(synthetic.bumpy(points) * [1.0, 0.7, 0.5], 0.3)
     surface = build_surface(points, faces)
@@ -53,7 +54,7 @@ def test_a_registration_step_solves_the_dense_point_to_plane_and_involution_syst
     field = robust_fit(x, reflection_across_plane(x, np.array([1.0, 0.5, 0.0]) / np.hypot(1.0, 0.5), 0.15),
                        x[::10], 0.5)
     start = field.weights.copy()
-    register(field, surface, sample, 1, DEFAULT)
+    register(field, surface, sample, 1, DEFAULT, involution)
 
     before = MirrorField(field.normal, field.offset, field.centres, field.width)
     before.weights = start
@@ -68,8 +69,8 @@ def test_a_registration_step_solves_the_dense_point_to_plane_and_involution_syst
     plane_target = np.einsum("ij,ij->i", landed_normals, landed - before.reflected(x))
     involution_rows = np.kron(before.kernel(images), np.eye(3))
     involution_target = (x - before.reflected(images)).reshape(-1)
-    matrix = (plane_rows * weights[:, None]).T @ plane_rows + INVOLUTION_WEIGHT * (
+    matrix = (plane_rows * weights[:, None]).T @ plane_rows + involution * (
         involution_rows * np.repeat(weights, 3)[:, None]).T @ involution_rows
-    right = plane_rows.T @ (weights * plane_target) + INVOLUTION_WEIGHT * involution_rows.T @ (
+    right = plane_rows.T @ (weights * plane_target) + involution * involution_rows.T @ (
         np.repeat(weights, 3) * involution_target)
     np.testing.assert_allclose(field.weights.reshape(-1), _ridge_solve(matrix, right), rtol=1e-8, atol=1e-10)

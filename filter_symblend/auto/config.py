@@ -120,8 +120,8 @@ class AutoConfig:
         "being misled by the rough map's local errors, the second a swung limb or a bend's ends")
     field_iterations: int = _field(
         10, "ICP iterations per width",
-        "iterations of each candidate's registration while candidates are compared: point-to-plane ICP lands "
-        "the images on the surface in a few; sliding along it takes many more (registration_iterations)")
+        "iterations of a mirror field's registration at each width: point-to-plane ICP lands the images on the "
+        "surface in a few; what they slide along it afterwards the involution's weight decides (auto/field.py)")
     screening_samples: int = _field(
         800, "vertices",
         "vertices on which each candidate map is registered before they are compared (the winner is "
@@ -134,12 +134,6 @@ class AutoConfig:
         1500, "vertices",
         "vertices the winning mirror field is registered on: enough for every kernel centre to see several "
         "of them within a width")
-    registration_iterations: int = _field(
-        30, "ICP iterations per width",
-        "iterations of the winning field's registration on a shape that may be bent or compressed (not a "
-        "posed body): its images land on the surface in a few, then slide along it toward their twins by a "
-        "little each step (10 leave a remeshed cow under Figure 1's map with 80 % of its twins within 1 % of "
-        "the diagonal, 30 with 97 %; chosen on the remeshed cow and spot, docs/benchmarks.md)")
 
     @classmethod
     def describe(cls) -> str:

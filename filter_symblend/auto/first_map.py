@@ -27,9 +27,9 @@ candidates, in order:
    whitened plane mirrors more than any plane, the intrinsic mirror of the whitened shape (a compression oblique
    to the mirror breaks the symmetry of surface distances, whitening restores it) and a field from it.
 4. Last, the best field registered again on more vertices with finer fields and, unless the shape is a posed
-   body, for longer (``registration_iterations``: a field's images land on the surface in a few steps, then slide
-   along it toward their twins a little each step; it takes the coarse one's place if it mirrors at least as
-   much), and the tessellation's own mirror grown from the best map's twins.
+   body, let slide along the surface toward its twins (:data:`.field.SLIDING_INVOLUTION_WEIGHT`; it takes the
+   coarse one's place if it mirrors at least as much), and the tessellation's own mirror grown from the best map's
+   twins.
 
 The intrinsic mirror is a candidate of every shape no plane mirrors, even when a field suffices before it
 (it is computed anyway: its opinion on each twin is kept, :func:`.confidence.mirror_pairs`), in a thread beside
@@ -52,7 +52,8 @@ from ..core.parallel import Beside
 from ..errors import SymmetryNotFoundError
 from .config import AutoConfig
 from .connectivity import tessellation_mirror
-from .field import MirrorField, field_centres, refitted, register, robust_fit, robust_tolerance
+from .field import (INVOLUTION_WEIGHT, SLIDING_INVOLUTION_WEIGHT, MirrorField, field_centres, refitted, register,
+                    robust_fit, robust_tolerance)
 from .intrinsic_map import intrinsic_pairs
 from .maps import WHITENED_PLANE, MirrorMap, affine_map, field_map, pairs_map, plane_map, point_pairs_map
 from .registration import MIN_DEVIATION, POOL, SAMPLES, coherent_point_drift, registration_sample
@@ -137,13 +138,13 @@ def _drift_predictions(start: MirrorMap, x: np.ndarray) -> np.ndarray:
 
 
 def registered_field(surface: Surface, sample: np.ndarray, field: MirrorField, config: AutoConfig,
-                     iterations: int) -> MirrorField:
+                     involution: float) -> MirrorField:
     """``field`` carried through ``config.field_widths`` (coarse to fine) on ``field_centres`` centres,
-    registered at each on the ``sample`` vertices in ``iterations`` steps."""
+    registered at each on the ``sample`` vertices, m(m(x)) = x weighing ``involution`` (:func:`.field.register`)."""
     centres = field_centres(surface, sample, config.field_centres)
     for width in config.field_widths:
         field = refitted(field, surface.points[sample], centres, width * surface.diagonal)
-        register(field, surface, sample, iterations, config)
+        register(field, surface, sample, config.field_iterations, config, involution)
     return field
 
 
@@ -280,17 +281,17 @@ def _candidates(surface: Surface, planes: list, search: _Search, config: AutoCon
 
 
 def _refined_field(surface: Surface, search: _Search, config: AutoConfig, progress) -> None:
-    """The search's best registered field registered again on more vertices with finer fields, for
-    ``config.registration_iterations`` steps (``field_iterations`` on a posed body, where the intrinsic mirror takes
-    a field's place when it is sound: on the 22 BCICP shapes chosen on, 30 steps changed no figure and cost 1-3 s
-    a shape); it takes the coarse one's place if it mirrors at least as much."""
+    """The search's best registered field registered again on more vertices with finer fields, let slide along the
+    surface toward its twins (``SLIDING_INVOLUTION_WEIGHT``; on a posed body ``INVOLUTION_WEIGHT`` as before, since
+    its sound intrinsic mirror takes a field's place: not measured there); it takes the coarse one's place if it
+    mirrors at least as much."""
     if search.fields:
         name = max(search.fields, key=lambda field: search.shares[field])
         if progress is not None:
             progress(60.0, f"{name}, on {config.registration_samples} vertices")
         sample = _strided(surface, config.registration_samples)
-        iterations = config.field_iterations if search.posed else config.registration_iterations
-        search.score(field_map(surface, registered_field(surface, sample, search.fields[name], config, iterations),
+        involution = INVOLUTION_WEIGHT if search.posed else SLIDING_INVOLUTION_WEIGHT
+        search.score(field_map(surface, registered_field(surface, sample, search.fields[name], config, involution),
                                name))
 
 
