@@ -283,8 +283,8 @@ def _candidates(surface: Surface, planes: list, search: _Search, config: AutoCon
 def _refined_field(surface: Surface, search: _Search, config: AutoConfig, progress) -> None:
     """The search's best registered field registered again on more vertices with finer fields, let slide along the
     surface toward its twins (``SLIDING_INVOLUTION_WEIGHT``; on a posed body ``INVOLUTION_WEIGHT`` as before, since
-    its sound intrinsic mirror takes a field's place: not measured there); it takes the coarse one's place if it
-    mirrors at least as much."""
+    its sound intrinsic mirror takes a field's place: let slide, the 22 BCICP shapes chosen on kept their figures but
+    cat4 took 8.6 -> 14.2 s); it takes the coarse one's place if it mirrors at least as much."""
     if search.fields:
         name = max(search.fields, key=lambda field: search.shares[field])
         if progress is not None:
