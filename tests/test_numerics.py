@@ -409,6 +409,7 @@ def test_farthest_point_order_matches_the_textbook_loop():
         expected.append(int(np.argmax(distance)))
         distance = np.minimum(distance, np.linalg.norm(points - points[expected[-1]], axis=1))
     np.testing.assert_array_equal(farthest_point_order(points, 200, start=7), expected)
+    assert farthest_point_order(points[:0], 0).shape == (0,)  # none among none (every twin of a shape confident)
 
 
 @pytest.mark.parametrize("count", [5, 300, 3001])

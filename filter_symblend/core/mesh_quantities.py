@@ -42,7 +42,10 @@ def mean_spacing(points: np.ndarray, faces: np.ndarray) -> float:
 
 def farthest_point_order(points: np.ndarray, count: int, start: int | None = None) -> np.ndarray:
     """Indices (count,) into ``points`` (n, 3) by farthest-point sampling from index ``start``
-    (default: the point nearest the centroid, a start that does not depend on the vertex order)."""
+    (default: the point nearest the centroid, a start that does not depend on the vertex order); none for
+    ``count`` 0, whatever ``points`` (none among none)."""
+    if count == 0:
+        return np.empty(0, dtype=np.int64)
     if start is None:
         start = int(np.argmin(np.linalg.norm(points - points.mean(axis=0), axis=1)))
     chosen = np.empty(count, dtype=np.int64)

@@ -170,8 +170,7 @@ def landmark_seconds(points: np.ndarray, twin: np.ndarray, confidence: np.ndarra
     left = np.flatnonzero((partner >= 0) & single & single[np.maximum(partner, 0)])
     left = left[np.linalg.norm(points[left] - points[partner[left]], axis=1) > 0.02 * diagonal]
     sure = confidence[left] >= CONFIDENT
-    order = [part[farthest_point_order(points[part], len(part))] if len(part) else part  # every twin confident
-             for part in (left[sure], left[~sure])]
+    order = [part[farthest_point_order(points[part], len(part))] for part in (left[sure], left[~sure])]
     left = _distinct(np.concatenate(order), np.arange(len(points)), partner, count)  # the confident first
     widths = {"phi_width": DEFAULTS["phi_width"], "theta_width": DEFAULTS["theta_width"]}
     for widening in range(WIDENINGS + 1):  # a tip or a stray twin: the widths widened as the rounds widen them
