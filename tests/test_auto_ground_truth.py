@@ -78,12 +78,43 @@ def test_the_whitened_shapes_intrinsic_mirror_survives_a_compression_that_breaks
     assert np.median(errors[True]) < 0.005 and np.mean(errors[True] < 0.02) > 0.95
 
 
+@pytest.mark.parametrize("mesh", ["cow", "spot"])
+def test_a_field_let_slide_keeps_the_true_twins_at_the_rounded_ends_of_a_bend(remeshed_cow, mesh):
+    """The remeshed mesh bent 1.2 rad; a field of the finest width fitted to its true twins, then registered let
+    slide (the chosen field's registration). At the rounded ends of the bend any turn of the mirror lands on the
+    surface; a ridge on the weights pulled the map back toward the plane reflection each step (the last tenth of the
+    length: cow 94 %, spot 75 % of the twins left within 1 % of the diagonal); on the step, it keeps them."""
+    from filter_symblend.auto.config import DEFAULT
+    from filter_symblend.auto.field import RIDGE, MirrorField, field_centres, fit_to_pairs, register
+    from filter_symblend.auto.first_map import _strided
+    from filter_symblend.auto.surface import build_surface
+    from filter_symblend.core.landmark_asymmetry import fit_mirror_plane
+    if mesh == "spot" and not (SHARED_DATA / "spot.obj").exists():
+        pytest.skip("../shared/data/spot.obj is absent")
+    truth = remeshed_cow if mesh == "cow" else remeshed_ground_truth(SHARED_DATA / "spot.obj", 2.0)
+    deformed = synthetic.random_rigid(synthetic.bend(truth.points, 1.2), seed=7)
+    surface = build_surface(deformed, truth.faces)
+    sample = _strided(surface, DEFAULT.registration_samples)
+    x, y = deformed[truth.left], truth.twins(deformed)
+    plane = fit_mirror_plane(x, y)
+    field = MirrorField(plane.normal, plane.offset, field_centres(surface, sample, DEFAULT.field_centres),
+                        DEFAULT.field_widths[-1] * surface.diagonal)
+    fit_to_pairs(field, np.vstack([x, y]), np.vstack([y, x]), np.ones(2 * len(x)), RIDGE)
+    along = truth.points[truth.left, 2]
+    end = along > np.quantile(along, 0.9)
+    assert np.all(np.linalg.norm(field(x) - y, axis=1)[end] < 0.01 * surface.diagonal)
+    register(field, surface, sample, DEFAULT.field_iterations, DEFAULT, sliding=True)
+    off = np.linalg.norm(field(x) - y, axis=1) / surface.diagonal
+    print(mesh, "twins within 1 %, all and the last tenth:", np.mean(off < 0.01), np.mean(off[end] < 0.01))
+    assert np.mean(off[end] < 0.01) > 0.97 and np.mean(off < 0.01) > 0.99
+
+
 @pytest.mark.skipif(not (SHARED_DATA / "spot.obj").exists(), reason="../shared/data/spot.obj is absent")
 def test_the_paper_figure_1_map_on_remeshed_spot_is_paired_by_the_whitened_shapes_intrinsic_mirror():
     """Spot remeshed, bent 1.2 rad and compressed to 65 % obliquely (the paper's Figure 1 map): every map of space
     slides a third of the twins by 4-12 % of the diagonal, and so did the intrinsic mirror, until the whitened
     shape's was a candidate (9.4x the symmetry error 100 landmarks leave, then 2.6x, 1.1x since the winning field is
-    let slide along the surface toward its twins: docs/benchmarks.md)."""
+    let slide along the surface toward its twins, 0.69x since its ridge damps the steps: docs/benchmarks.md)."""
     truth = remeshed_ground_truth(SHARED_DATA / "spot.obj", 2.0)
     deformed = synthetic.random_rigid(synthetic.figure_1_deformation(truth.points), seed=7)
     automatic = symmetrize(deformed, faces=truth.faces, pairs="auto", mode="affine")
@@ -92,7 +123,7 @@ def test_the_paper_figure_1_map_on_remeshed_spot_is_paired_by_the_whitened_shape
     print("Figure 1, symmetry error input / auto / 100 landmarks:", errors)
     assert automatic.report.auto_pairs.coverage["registration from the intrinsic mirror of the whitened shape"] \
         == max(share for name, share in automatic.report.auto_pairs.coverage.items() if not name.endswith("%"))
-    assert errors[1] < 1.4 * errors[2]
+    assert errors[1] < 0.9 * errors[2]
 
 
 def _reported_twins_off(result, truth, points) -> tuple[np.ndarray, np.ndarray]:
@@ -120,15 +151,17 @@ def test_the_paper_figure_1_map_on_the_remeshed_cow_is_paired_once_the_fields_sl
     assert errors[0] < errors[1]
 
 
-def test_a_remeshed_cow_bent_strongly_is_not_refused(remeshed_cow):
-    """Bent 1.2 rad the remeshed cow is paired and made more symmetric, but not as far as 100 landmarks make it
-    (the issue's target, missed: docs/automatic-pairs.md)."""
+def test_a_remeshed_cow_bent_strongly_comes_back_more_symmetric_than_100_landmarks_make_it(remeshed_cow):
+    """Bent 1.2 rad the remeshed cow is paired and made more symmetric than 100 landmarks make it: 0.46x their
+    symmetry error since the chosen field's ridge damps its steps (0.79x before, its rounded ends left turned back
+    toward the plane), not the fifth the issue asks (docs/benchmarks.md)."""
     truth = remeshed_cow
     deformed = synthetic.random_rigid(synthetic.bend(truth.points, 1.2), seed=7)
     automatic = symmetrize(deformed, faces=truth.faces, pairs="auto", mode="affine")
-    before, after = truth.symmetry_error(deformed), truth.symmetry_error(automatic.points)
-    print("bend 1.2 rad, symmetry error before / after:", before, after)
-    assert after < 0.5 * before
+    alone = _landmarks_alone(deformed, *truth.landmarks(100), "affine")
+    before, after, landmarks = (truth.symmetry_error(p) for p in (deformed, automatic.points, alone.points))
+    print("bend 1.2 rad, symmetry error before / after / 100 landmarks:", before, after, landmarks)
+    assert after < 0.6 * landmarks
 
 
 def test_a_swung_limb_left_asymmetric_by_a_map_of_space_is_restored_from_the_intrinsic_start(remeshed_cow):
@@ -296,7 +329,7 @@ def test_the_growth_tries_a_failed_source_again_only_when_a_new_pair_comes_withi
     expected = partner.copy()
     expected_waves = _growth_trying_every_source(surface, expected, everywhere, everywhere, config)
     reference_queries, queried[:] = sum(queried), []
-    waves = growth.grow(surface, partner, everywhere, everywhere, config)
+    waves = growth.grow(surface, partner, everywhere, everywhere, everywhere, config)
     assert expected_waves >= 5 and 4 <= len(seeds) < 0.1 * np.count_nonzero(expected >= 0)  # it crept from them
     assert waves == expected_waves
     np.testing.assert_array_equal(partner, expected)

@@ -15,9 +15,11 @@ from filter_symblend.testing import synthetic
 pytestmark = pytest.mark.auto
 
 
-def _ridge_solve(matrix: np.ndarray, right: np.ndarray) -> np.ndarray:
-    """The dense ridge solve the field's systems stand for: RIDGE x the mean diagonal added."""
-    return np.linalg.solve(matrix + RIDGE * np.trace(matrix) / len(matrix) * np.eye(len(matrix)), right)
+def _ridge_solve(matrix: np.ndarray, right: np.ndarray, toward: np.ndarray | float = 0.0) -> np.ndarray:
+    """The dense ridge solve the field's systems stand for: RIDGE x the mean diagonal added, pulling the unknowns
+    toward ``toward`` (none: toward 0)."""
+    ridge = RIDGE * np.trace(matrix) / len(matrix)
+    return np.linalg.solve(matrix + ridge * np.eye(len(matrix)), right + ridge * toward)
 
 
 def _field(rng) -> tuple[MirrorField, np.ndarray]:
@@ -41,11 +43,13 @@ def test_the_fit_to_pairs_is_the_dense_weighted_least_squares_of_the_kronecker_s
     np.testing.assert_allclose(field.weights.reshape(-1), expected, rtol=1e-9, atol=1e-12)
 
 
-@pytest.mark.parametrize("involution", [INVOLUTION_WEIGHT, SLIDING_INVOLUTION_WEIGHT])
-def test_a_registration_step_solves_the_dense_point_to_plane_and_involution_system(involution):
+@pytest.mark.parametrize("sliding", [False, True])
+def test_a_registration_step_solves_the_dense_point_to_plane_and_involution_system(sliding):
     """One iteration of ``register`` on a surface: its new weights are those of the explicit design matrices,
-    point-to-plane rows (K_i kron n_i^T) and the involution's point-to-point rows (K(y_i) kron I_3) at the weight
-    given (the candidates' and the chosen field's), every row weighted, the unweighted ones included."""
+    point-to-plane rows (K_i kron n_i^T) and the involution's point-to-point rows (K(y_i) kron I_3) at the
+    candidates' weight, the ridge pulling the weights toward 0, or let slide (the chosen field's) at its weight, the
+    ridge pulling them toward the step's start; every row weighted, the unweighted ones included."""
+    involution = SLIDING_INVOLUTION_WEIGHT if sliding else INVOLUTION_WEIGHT
     points, faces = synthetic.icosphere(3)
     points = synthetic.bend(synthetic.bumpy(points) * [1.0, 0.7, 0.5], 0.3)
     surface = build_surface(points, faces)
@@ -53,8 +57,9 @@ def test_a_registration_step_solves_the_dense_point_to_plane_and_involution_syst
     x, normals = surface.points[sample], surface.normals[sample]
     field = robust_fit(x, reflection_across_plane(x, np.array([1.0, 0.5, 0.0]) / np.hypot(1.0, 0.5), 0.15),
                        x[::10], 0.5)
+    field.weights += 0.02 * np.random.default_rng(5).normal(size=field.weights.shape)  # a start off the plane
     start = field.weights.copy()
-    register(field, surface, sample, 1, DEFAULT, involution)
+    register(field, surface, sample, 1, DEFAULT, sliding)
 
     before = MirrorField(field.normal, field.offset, field.centres, field.width)
     before.weights = start
@@ -73,4 +78,5 @@ def test_a_registration_step_solves_the_dense_point_to_plane_and_involution_syst
         involution_rows * np.repeat(weights, 3)[:, None]).T @ involution_rows
     right = plane_rows.T @ (weights * plane_target) + involution * involution_rows.T @ (
         np.repeat(weights, 3) * involution_target)
-    np.testing.assert_allclose(field.weights.reshape(-1), _ridge_solve(matrix, right), rtol=1e-8, atol=1e-10)
+    toward = start.reshape(-1) if sliding else 0.0
+    np.testing.assert_allclose(field.weights.reshape(-1), _ridge_solve(matrix, right, toward), rtol=1e-8, atol=1e-10)

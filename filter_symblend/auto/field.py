@@ -8,7 +8,10 @@ rough map's wrong pairs do not pull it), then registered onto the surface: each 
 map's images toward the tangent planes of the surface where they land (point-to-plane ICP, which
 converges in a few steps where point-to-point creeps), while the map applied twice returns to the
 start (m(m(x)) = x, linearized at the current images), images landing far, or on a surface facing
-the wrong way, being left out. A ridge keeps the least-squares system well posed.
+the wrong way, being left out. A ridge keeps the least-squares system well posed. Let slide (the chosen
+field of a shape that may be bent or compressed), the involution term weighs less and the ridge damps each
+step instead of the weights, so that where the surface does not hold the map (a bend's rounded ends) nothing
+pulls it back toward the plane reflection it started from.
 
 Written here: scipy has no non-rigid registration. The coherent point drift this replaces (earlier
 in this layer) needed a start near the answer and a kernel too stiff for a strong bend.
@@ -29,6 +32,7 @@ from .config import AutoConfig
 CONVERGED = 1e-5
 # Ridge of a mirror field's least squares, x the normal matrix's mean diagonal: enough to keep the system
 # invertible where centres see no data, too little to pull a bend's large displacements back toward the plane.
+# Let slide, the registration puts it on each step (toward the current weights) instead (see SLIDING_INVOLUTION_WEIGHT).
 RIDGE = 1e-5
 # Rounds of Tukey reweighting when a field is fitted to a rough map's pairs: wrong pairs lose their weight
 # in two or three.
@@ -50,7 +54,11 @@ INVOLUTION_WEIGHT = 0.1
 # surface lands on it and is its own inverse too). A tenth of INVOLUTION_WEIGHT let the remeshed spot under Figure
 # 1's map reach 86 % of its twins within 1 % of the diagonal in 10 steps a width, against 66 % (82 % in 30 steps) at
 # INVOLUTION_WEIGHT; none at all did worse (84 %, and the remeshed cow bent 1.2 rad a median twin error of 0.28 %
-# of the diagonal against 0.22 %; docs/benchmarks.md).
+# of the diagonal against 0.22 %; docs/benchmarks.md). Let slide, the ridge damps each step rather than the weights:
+# toward none, it pulled the map toward the plane reflection every step wherever the point-to-plane term does not
+# hold it (a rounded end, which a bend turns: any turn of the mirror there lands on the surface), so that a field
+# started from the true twins of the remeshed spot bent 1.2 rad left them (a fifth of the twins then more than 1 %
+# of the diagonal off, 80 % in the last tenth of its length; damped, 0.1 %).
 SLIDING_INVOLUTION_WEIGHT = 0.01
 
 
@@ -155,10 +163,12 @@ def refitted(field: MirrorField, positions: np.ndarray, centres: np.ndarray, wid
 
 
 def register(field: MirrorField, surface, sample: np.ndarray, iterations: int, config: AutoConfig,
-             involution: float = INVOLUTION_WEIGHT) -> MirrorField:
+             sliding: bool = False) -> MirrorField:
     """``field`` refined (in place) so that it maps the ``sample`` (m,) vertices of ``surface`` (a
     :class:`.surface.Surface`) onto the surface, by symmetric point-to-plane ICP (see the module doc), m(m(x)) = x
-    weighing ``involution`` x the point-to-plane term."""
+    weighing INVOLUTION_WEIGHT x the point-to-plane term, the ridge on the weights; ``sliding``: the chosen field
+    let slide, m(m(x)) = x weighing SLIDING_INVOLUTION_WEIGHT and the ridge on each step."""
+    involution = SLIDING_INVOLUTION_WEIGHT if sliding else INVOLUTION_WEIGHT
     x = surface.points[sample]
     normals = surface.normals[sample]
     kernel = field.kernel(x)
@@ -191,7 +201,9 @@ def register(field: MirrorField, surface, sample: np.ndarray, iterations: int, c
             blocks[:, axis, :, axis] += gram
         matrix = blocks.reshape(matrix.shape)
         right += involution * ((image_kernel * weights[:, None]).T @ (x - field.reflected(images)))
-        field.weights = np.linalg.solve(_ridge(matrix, RIDGE), right.reshape(-1)).reshape(-1, 3)
+        start = field.weights.reshape(-1) if sliding else 0.0  # what the ridge pulls the weights toward
+        ridge = RIDGE * np.trace(matrix) / len(matrix)
+        field.weights = np.linalg.solve(_ridge(matrix, RIDGE), right.reshape(-1) + ridge * start).reshape(-1, 3)
     return field
 
 

@@ -27,7 +27,7 @@ candidates, in order:
    whitened plane mirrors more than any plane, the intrinsic mirror of the whitened shape (a compression oblique
    to the mirror breaks the symmetry of surface distances, whitening restores it) and a field from it.
 4. Last, the best field registered again on more vertices with finer fields and, unless the shape is a posed
-   body, let slide along the surface toward its twins (:data:`.field.SLIDING_INVOLUTION_WEIGHT`; it takes the
+   body, let slide along the surface toward its twins (:func:`.field.register`; it takes the
    coarse one's place if it mirrors at least as much), and the tessellation's own mirror grown from the best map's
    twins.
 
@@ -52,8 +52,7 @@ from ..core.parallel import Beside
 from ..errors import SymmetryNotFoundError
 from .config import AutoConfig
 from .connectivity import tessellation_mirror
-from .field import (INVOLUTION_WEIGHT, SLIDING_INVOLUTION_WEIGHT, MirrorField, field_centres, refitted, register,
-                    robust_fit, robust_tolerance)
+from .field import MirrorField, field_centres, refitted, register, robust_fit, robust_tolerance
 from .intrinsic_map import intrinsic_pairs
 from .maps import WHITENED_PLANE, MirrorMap, affine_map, field_map, pairs_map, plane_map, point_pairs_map
 from .registration import MIN_DEVIATION, POOL, SAMPLES, coherent_point_drift, registration_sample
@@ -138,13 +137,13 @@ def _drift_predictions(start: MirrorMap, x: np.ndarray) -> np.ndarray:
 
 
 def registered_field(surface: Surface, sample: np.ndarray, field: MirrorField, config: AutoConfig,
-                     involution: float) -> MirrorField:
+                     sliding: bool) -> MirrorField:
     """``field`` carried through ``config.field_widths`` (coarse to fine) on ``field_centres`` centres,
-    registered at each on the ``sample`` vertices, m(m(x)) = x weighing ``involution`` (:func:`.field.register`)."""
+    registered at each on the ``sample`` vertices, let slide or not (``sliding``, :func:`.field.register`)."""
     centres = field_centres(surface, sample, config.field_centres)
     for width in config.field_widths:
         field = refitted(field, surface.points[sample], centres, width * surface.diagonal)
-        register(field, surface, sample, config.field_iterations, config, involution)
+        register(field, surface, sample, config.field_iterations, config, sliding)
     return field
 
 
@@ -282,17 +281,16 @@ def _candidates(surface: Surface, planes: list, search: _Search, config: AutoCon
 
 def _refined_field(surface: Surface, search: _Search, config: AutoConfig, progress) -> None:
     """The search's best registered field registered again on more vertices with finer fields, let slide along the
-    surface toward its twins (``SLIDING_INVOLUTION_WEIGHT``; on a posed body ``INVOLUTION_WEIGHT`` as before, since
-    its sound intrinsic mirror takes a field's place: let slide, the 22 BCICP shapes chosen on kept their figures but
-    cat4 took 8.6 -> 14.2 s); it takes the coarse one's place if it mirrors at least as much."""
+    surface toward its twins (:func:`.field.register`; on a posed body not, since its sound intrinsic mirror takes a
+    field's place: let slide, the 22 BCICP shapes chosen on kept their figures but cat4 took 8.6 -> 14.2 s); it
+    takes the coarse one's place if it mirrors at least as much."""
     if search.fields:
         name = max(search.fields, key=lambda field: search.shares[field])
         if progress is not None:
             progress(60.0, f"{name}, on {config.registration_samples} vertices")
         sample = _strided(surface, config.registration_samples)
-        involution = INVOLUTION_WEIGHT if search.posed else SLIDING_INVOLUTION_WEIGHT
-        search.score(field_map(surface, registered_field(surface, sample, search.fields[name], config, involution),
-                               name))
+        field = registered_field(surface, sample, search.fields[name], config, sliding=not search.posed)
+        search.score(field_map(surface, field, name))
 
 
 def _tessellation_of_best(search: _Search, config: AutoConfig) -> None:

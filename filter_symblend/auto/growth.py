@@ -93,8 +93,10 @@ def affine_mirror_fits(x: np.ndarray, y: np.ndarray, weights: np.ndarray, ridge:
     return linear, cx, cy, rigid
 
 
-def grow(surface: Surface, partner: np.ndarray, eligible: np.ndarray, twins: np.ndarray, config: AutoConfig) -> int:
-    """Pair ``eligible`` (N,) bool vertices, with ``twins`` (N,) bool vertices, wave by wave from the pairs in
+def grow(surface: Surface, partner: np.ndarray, eligible: np.ndarray, twins: np.ndarray, own_twin: np.ndarray,
+         config: AutoConfig) -> int:
+    """Pair ``eligible`` (N,) bool vertices, with ``twins`` (N,) bool vertices (each with itself only if ``own_twin``
+    (N,) bool allows it: on the midline), wave by wave from the pairs in
     ``partner`` (N,) (twin index, itself on the midline, -1 unpaired; updated in place). Returns the number
     of waves.
 
@@ -124,7 +126,7 @@ def grow(surface: Surface, partner: np.ndarray, eligible: np.ndarray, twins: np.
         k = min(config.local_neighbours, len(paired))
         predicted, rigid, source_reach = _local_maps(points, partner, points[sources], paired, tree, k)
         vertex, _, ratio = surface.nearest_vertices(predicted)
-        ok = (ratio <= RATIO) & (partner[vertex] < 0) & twins[vertex]
+        ok = (ratio <= RATIO) & (partner[vertex] < 0) & twins[vertex] & ((vertex != sources) | own_twin[sources])
         if surface.is_mesh:
             ok &= np.einsum("nij,nj,ni->n", rigid, surface.normals[sources], surface.normals[vertex]) > 0
         tried_back = np.flatnonzero(ok)
@@ -181,10 +183,10 @@ def prune(surface: Surface, partner: np.ndarray, fixed: np.ndarray, config: Auto
 
 
 def grow_and_prune(space: Surface, geometry: Surface, partner: np.ndarray, eligible: np.ndarray,
-                   twins: np.ndarray, fixed: np.ndarray, config: AutoConfig) -> dict:
+                   twins: np.ndarray, own_twin: np.ndarray, fixed: np.ndarray, config: AutoConfig) -> dict:
     """:func:`prune` the seeds in ``partner`` on ``geometry`` (the input), :func:`grow` in ``space`` (where
     the map predicts: the input, or a symmetrized output; ``eligible`` (N,) bool vertices, with ``twins``
-    (N,) bool ones), prune again, and grow again without what was dropped, until nothing changes (at most
+    (N,) bool ones, with themselves where ``own_twin`` (N,) bool), prune again, and grow again without what was dropped, until nothing changes (at most
     ``PASSES``). The least precision the prune asks is ``config.coincident`` x the diagonal."""
     floor = config.coincident * space.diagonal
     dropped = np.zeros(len(partner), dtype=bool)
@@ -192,7 +194,7 @@ def grow_and_prune(space: Surface, geometry: Surface, partner: np.ndarray, eligi
     for _ in range(PASSES):
         removed = prune(geometry, partner, fixed, config, floor)
         dropped |= removed
-        grown = grow(space, partner, eligible & ~dropped, twins & ~dropped, config)
+        grown = grow(space, partner, eligible & ~dropped, twins & ~dropped, own_twin, config)
         waves += grown
         if not removed.any() and not grown:
             break

@@ -132,14 +132,19 @@ def _point_pairs(surface: Surface, sources: np.ndarray, twins, rows: np.ndarray)
     """(left corners, left weights, right corners, right weights, midline) of the ``rows`` of ``sources``
     (m,) with their twin points: the left one first; the sources that are their own twin (within half the
     local spacing) on the midline."""
-    itself = np.linalg.norm(twins.point[rows] - surface.points[sources[rows]], axis=1) \
-        <= 0.5 * surface.local_spacing[sources[rows]]
+    itself = _own_twins(surface, sources[rows], twins.point[rows])
     midline, rows = sources[rows[itself]], rows[~itself]
     own_corners, own_weights = vertex_points(sources[rows])
     left = twins.side[rows] > 0
     pick = lambda a, b: np.where(left[:, None], a, b)  # noqa: E731
     return (pick(own_corners, twins.corners[rows]), pick(own_weights, twins.weights[rows]),
             pick(twins.corners[rows], own_corners), pick(twins.weights[rows], own_weights), midline)
+
+
+def _own_twins(surface: Surface, sources: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(m,) bool: the ``sources`` (m,) whose twin ``points`` (m, 3) lie within half their local vertex spacing of
+    them: midline points."""
+    return np.linalg.norm(points - surface.points[sources], axis=1) <= 0.5 * surface.local_spacing[sources]
 
 
 def _exact_pairs(mirror: MirrorMap, sources: np.ndarray, twins, exact_twins: np.ndarray,
@@ -158,8 +163,12 @@ def _exact_pairs(mirror: MirrorMap, sources: np.ndarray, twins, exact_twins: np.
     partner[seeds], partner[twin] = twin, seeds
     in_sample = np.zeros(n, dtype=bool)
     in_sample[sources] = True
+    # A vertex is grown into its own twin only where the map puts it on the midline too: near the plane, in a thin
+    # part (a cow's tail under Figure 1's map), local maps can take a vertex two spacings off it for its own twin.
+    own_twin = np.zeros(n, dtype=bool)
+    own_twin[sources] = _own_twins(surface, sources, twins.point)
     growth = grow_and_prune(surface, geometry, partner, in_sample & ~forbidden, surface.usable & ~forbidden,
-                            forbidden, config)
+                            own_twin, forbidden, config)
     tessellation = None
     if surface.is_mesh:
         mirrored = tessellation_mirror(surface.adjacency, partner, surface.usable & ~forbidden)
@@ -172,7 +181,7 @@ def _exact_pairs(mirror: MirrorMap, sources: np.ndarray, twins, exact_twins: np.
             partner[:] = np.where(whole, mirrored, -1)
             _hold_landmarks(partner, fixed)
             growth = grow_and_prune(surface, geometry, partner, in_sample & ~forbidden,
-                                    surface.usable & ~forbidden, forbidden | whole, config)
+                                    surface.usable & ~forbidden, own_twin, forbidden | whole, config)
     automatic = (partner >= 0) & ~forbidden
     vertex_share = float(np.count_nonzero(automatic & surface.usable) /
                          max(np.count_nonzero(surface.usable & ~forbidden), 1))
