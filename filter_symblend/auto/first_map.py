@@ -230,9 +230,9 @@ class _Search:
         return self.shares[self.best.name] >= enough
 
 
-def _candidates(surface: Surface, planes: list, search: _Search, config: AutoConfig, compression: bool, progress):
+def _candidates(surface: Surface, planes: list, search: _Search, config: AutoConfig, progress):
     """Batches of candidate maps, cheapest first (see the module doc); each batch is scored before the next is
-    made, which may read the shares so far. ``compression``: see :func:`first_map`; without it (a posed body) the
+    made, which may read the shares so far. For a posed body (``search.posed``: no compression of the whole) the
     drifts are not made (on the 40 BCICP shapes they won three times, each where the intrinsic mirror's twins were as
     right or righter, and cost 1-2 s a shape)."""
     rigid = [plane_map(surface, *plane, name="mirror plane" if rank == 1 else f"mirror plane {rank}")
@@ -263,6 +263,7 @@ def _candidates(surface: Surface, planes: list, search: _Search, config: AutoCon
 
     for mirror in ranked:
         yield registered(mirror.name, mirror.predict(x))
+    compression = not search.posed
     if compression:
         yield registered(f"drift from the {ranked[0].name}", _drift_predictions(ranked[0], x))
     intrinsic = search.take_intrinsic()
@@ -313,7 +314,7 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, compress
     planes = surface_mirror_planes(surface.points[surface.usable_index])
     search = _Search(scored, config, posed=not compression)
     try:
-        for batch in _candidates(surface, planes, search, config, compression, progress):
+        for batch in _candidates(surface, planes, search, config, progress):
             for mirror in batch:
                 search.score(mirror)
             if search.suffices:
@@ -331,7 +332,7 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, compress
     # A plain map that mirrors min_coverage shows a symmetry up to the scan's noise; else the field must
     # prove it within its own precision.
     best = _refuse_or(best, search.shares, config, None if rigid_share >= config.min_coverage else scored)
-    if not compression:
+    if search.posed:
         best = _intrinsic_if_sound(best, search, config)
     rivals = close_rivals(best, list(search.maps.values()), search.shares, scored, config)
     return FirstMap(best, search.shares, planes[0], rivals, search.intrinsic)
