@@ -76,8 +76,8 @@ def test_on_a_posed_body_a_sound_intrinsic_mirror_is_chosen_over_a_field_that_mi
     """On public ground truth (the BCICP dataset, read in place; skipped without it): FAUST's tr_reg_055. A field
     registered from the best plane mirrors more of the surface than the intrinsic mirror (measured 98 % against
     94 %) but slides along it (93 % of the published twins within 0.05 sqrt(area)); on a posed body the intrinsic
-    mirror, sound itself, is chosen (98 % of its twins right). In any other mode the field that mirrors the most is
-    chosen, as before."""
+    mirror, sound itself, is chosen (98 % of its twins right; sharpened by a field where the field lands precisely and
+    agrees). In any other mode the field that mirrors the most is chosen, as before."""
     import numpy as np
     from benchmarks.mirror_maps import surface_area, twin_errors
 
@@ -98,7 +98,8 @@ def test_on_a_posed_body_a_sound_intrinsic_mirror_is_chosen_over_a_field_that_mi
              for name, mirror in made.items()}
     print({name: (round(shares[name], 3), round(right[name], 3)) for name in shares})
     most = max(shares, key=shares.get)
-    assert found.map.name == "intrinsic mirror" and "registration" in most and shares[most] > shares[found.map.name]
+    assert found.map.name.startswith("intrinsic mirror")  # sharpened by a field where that holds, or not
+    assert "registration" in most and shares[most] > shares[found.map.name]
     assert right[found.map.name] >= 0.97 and right[most] <= right[found.map.name] - 0.03
     anywhere = first_map(surface, scored, DEFAULT, compression=True)  # a shape that may be compressed: by the share
     assert _maps(anywhere.shares)[anywhere.map.name] == max(_maps(anywhere.shares).values())

@@ -54,7 +54,8 @@ from .config import AutoConfig
 from .connectivity import tessellation_mirror
 from .field import MirrorField, field_centres, refitted, register, robust_fit, robust_tolerance
 from .intrinsic_map import intrinsic_pairs
-from .maps import WHITENED_PLANE, MirrorMap, affine_map, field_map, pairs_map, plane_map, point_pairs_map
+from .maps import (WHITENED_PLANE, MirrorMap, affine_map, field_map, pairs_map, plane_map, point_pairs_map,
+                   sharpened_map)
 from .registration import MIN_DEVIATION, POOL, SAMPLES, coherent_point_drift, registration_sample
 from .rivals import Rival, close_rivals
 from .surface import Outline, Surface
@@ -334,6 +335,7 @@ def first_map(surface: Surface, scored: np.ndarray, config: AutoConfig, compress
     best = _refuse_or(best, search.shares, config, None if rigid_share >= config.min_coverage else scored)
     if search.posed:
         best = _intrinsic_if_sound(best, search, config)
+    best = _sharpened(best, search, config)
     rivals = close_rivals(best, list(search.maps.values()), search.shares, scored, config)
     return FirstMap(best, search.shares, planes[0], rivals, search.intrinsic)
 
@@ -348,6 +350,18 @@ def _intrinsic_if_sound(best: MirrorMap, search: _Search, config: AutoConfig) ->
     if intrinsic is None or best.name not in search.fields:
         return best
     return intrinsic if _soundness(intrinsic, search.shares[intrinsic.name], config, search.scored).sound else best
+
+
+def _sharpened(best: MirrorMap, search: _Search, config: AutoConfig) -> MirrorMap:
+    """An intrinsic mirror chosen (``best``) sharpened by the registered field that mirrors the most, where the field
+    lands as precisely and agrees (:func:`.maps.sharpened_map`); any other map as it is. Its share is measured (the
+    report's, the rivals'), not compared: within the whole tolerance the seams between the two cost it a little
+    (the remeshed spot with a leg swung 0.6 rad: 99.3 -> 99.1 %), while it lands more precisely."""
+    if best.name not in {mirror.name for mirror in search.intrinsics} or not search.fields:
+        return best
+    sharpened = sharpened_map(search.maps[max(search.fields, key=lambda name: search.shares[name])], best, config)
+    search.score(sharpened)
+    return sharpened
 
 
 class _Soundness(NamedTuple):

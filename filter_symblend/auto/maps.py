@@ -118,3 +118,36 @@ def point_pairs_map(surface: Surface, x: np.ndarray, y: np.ndarray, normal: np.n
 
     normal = normalize(np.asarray(normal, dtype=float))
     return MirrorMap(name, surface, predict, normal, carry, both=both)
+
+
+def sharpened_map(precise: MirrorMap, rough: MirrorMap, config: AutoConfig) -> MirrorMap:
+    """``precise``'s twins (a registered field) where they land on the surface within ``field_precision`` of the
+    landing tolerance, at least as near as ``rough``'s (an intrinsic mirror), and within the tolerance of them;
+    ``rough``'s elsewhere. A field is precise where it follows the surface and wrong where it cannot (a swung limb),
+    which the intrinsic mirror follows, coarsely: on the remeshed cow and spot with a leg swung 0.6 rad, the field's
+    twins on the body are a median 0.07 % of the diagonal off, the intrinsic mirror's 0.3 %, and on the leg 5.7 %
+    and 1.9 %. Where the intrinsic mirror's pairs are exact vertices (a tessellation that mirrors itself) its twins
+    land exactly, and stay."""
+    surface = precise.surface
+    tolerance = config.landing_tolerance * surface.diagonal
+
+    def taken(queries: np.ndarray, fine: np.ndarray, coarse: np.ndarray) -> np.ndarray:
+        landing, coarse_landing = surface.nearest_points(fine)[1], surface.nearest_points(coarse)[1]
+        return ((landing <= np.minimum(config.field_precision * tolerance, coarse_landing)) &
+                (np.linalg.norm(fine - coarse, axis=1) <= tolerance))[:, None]
+
+    def predict(queries: np.ndarray) -> np.ndarray:
+        fine, coarse = precise.predict(queries), rough.predict(queries)
+        return np.where(taken(queries, fine, coarse), fine, coarse)
+
+    def both(queries: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        (fine, fine_normals), (coarse, coarse_normals) = (precise.twins_and_normals(queries, normals),
+                                                          rough.twins_and_normals(queries, normals))
+        use = taken(queries, fine, coarse)
+        return np.where(use, fine, coarse), np.where(use, fine_normals, coarse_normals)
+
+    def carry(normals: np.ndarray, queries: np.ndarray) -> np.ndarray:
+        return both(queries, normals)[1]
+
+    return MirrorMap(f"{rough.name} sharpened by the {precise.name}", surface, predict, rough.normal, carry,
+                     both=both)
