@@ -121,7 +121,8 @@ class AutoConfig:
     field_iterations: int = _field(
         10, "ICP iterations per width",
         "iterations of a mirror field's registration at each width: point-to-plane ICP lands the images on the "
-        "surface in a few; what they slide along it afterwards the involution's weight and the ridge decide (auto/field.py)")
+        "surface in a few; what they slide along it afterwards the involution's weight and the ridge decide "
+        "(auto/field.py)")
     screening_samples: int = _field(
         800, "vertices",
         "vertices on which each candidate map is registered before they are compared (the winner is "

@@ -32,7 +32,7 @@ from .config import AutoConfig
 CONVERGED = 1e-5
 # Ridge of a mirror field's least squares, x the normal matrix's mean diagonal: enough to keep the system
 # invertible where centres see no data, too little to pull a bend's large displacements back toward the plane.
-# Let slide, the registration puts it on each step (toward the current weights) instead (see SLIDING_INVOLUTION_WEIGHT).
+# Let slide, the registration puts it on each step (toward the current weights) instead: SLIDING_INVOLUTION_WEIGHT.
 RIDGE = 1e-5
 # Rounds of Tukey reweighting when a field is fitted to a rough map's pairs: wrong pairs lose their weight
 # in two or three.
@@ -57,8 +57,8 @@ INVOLUTION_WEIGHT = 0.1
 # of the diagonal against 0.22 %; docs/benchmarks.md). Let slide, the ridge damps each step rather than the weights:
 # toward none, it pulled the map toward the plane reflection every step wherever the point-to-plane term does not
 # hold it (a rounded end, which a bend turns: any turn of the mirror there lands on the surface), so that a field
-# started from the true twins of the remeshed spot bent 1.2 rad left them (a fifth of the twins then more than 1 %
-# of the diagonal off, 80 % in the last tenth of its length; damped, 0.1 %).
+# fitted to the true twins of the remeshed spot bent 1.2 rad and registered left a quarter of those in the last
+# tenth of its length more than 1 % of the diagonal off (damped, none; tests/test_auto_ground_truth.py).
 SLIDING_INVOLUTION_WEIGHT = 0.01
 
 

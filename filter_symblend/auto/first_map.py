@@ -29,7 +29,8 @@ candidates, in order:
 4. Last, the best field registered again on more vertices with finer fields and, unless the shape is a posed
    body, let slide along the surface toward its twins (:func:`.field.register`; it takes the
    coarse one's place if it mirrors at least as much), and the tessellation's own mirror grown from the best map's
-   twins.
+   twins. An intrinsic mirror chosen is sharpened by the field that mirrors the most where that field lands
+   precisely and agrees with it (:func:`.maps.sharpened_map`).
 
 The intrinsic mirror is a candidate of every shape no plane mirrors, even when a field suffices before it
 (it is computed anyway: its opinion on each twin is kept, :func:`.confidence.mirror_pairs`), in a thread beside

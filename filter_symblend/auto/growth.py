@@ -95,10 +95,9 @@ def affine_mirror_fits(x: np.ndarray, y: np.ndarray, weights: np.ndarray, ridge:
 
 def grow(surface: Surface, partner: np.ndarray, eligible: np.ndarray, twins: np.ndarray, own_twin: np.ndarray,
          config: AutoConfig) -> int:
-    """Pair ``eligible`` (N,) bool vertices, with ``twins`` (N,) bool vertices (each with itself only if ``own_twin``
-    (N,) bool allows it: on the midline), wave by wave from the pairs in
-    ``partner`` (N,) (twin index, itself on the midline, -1 unpaired; updated in place). Returns the number
-    of waves.
+    """Pair ``eligible`` (N,) bool vertices, with ``twins`` (N,) bool vertices (each with itself only where
+    ``own_twin`` (N,) bool allows it: on the midline), wave by wave from the pairs in ``partner`` (N,) (twin index,
+    itself on the midline, -1 unpaired; updated in place). Returns the number of waves.
 
     A wave tries the unpaired vertices near the pairs: the local map of a source's nearest pairs predicts its
     twin, which is taken if its nearest vertex is unambiguous, unpaired, faces the mirrored way, and the local
@@ -186,8 +185,9 @@ def grow_and_prune(space: Surface, geometry: Surface, partner: np.ndarray, eligi
                    twins: np.ndarray, own_twin: np.ndarray, fixed: np.ndarray, config: AutoConfig) -> dict:
     """:func:`prune` the seeds in ``partner`` on ``geometry`` (the input), :func:`grow` in ``space`` (where
     the map predicts: the input, or a symmetrized output; ``eligible`` (N,) bool vertices, with ``twins``
-    (N,) bool ones, with themselves where ``own_twin`` (N,) bool), prune again, and grow again without what was dropped, until nothing changes (at most
-    ``PASSES``). The least precision the prune asks is ``config.coincident`` x the diagonal."""
+    (N,) bool ones, with themselves where ``own_twin`` (N,) bool), prune again, and grow again without what was
+    dropped, until nothing changes (at most ``PASSES``). The least precision the prune asks is
+    ``config.coincident`` x the diagonal."""
     floor = config.coincident * space.diagonal
     dropped = np.zeros(len(partner), dtype=bool)
     waves = 0

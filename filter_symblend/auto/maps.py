@@ -131,19 +131,20 @@ def sharpened_map(precise: MirrorMap, rough: MirrorMap, config: AutoConfig) -> M
     surface = precise.surface
     tolerance = config.landing_tolerance * surface.diagonal
 
-    def taken(queries: np.ndarray, fine: np.ndarray, coarse: np.ndarray) -> np.ndarray:
+    def taken(fine: np.ndarray, coarse: np.ndarray) -> np.ndarray:
+        """(m, 1) bool: where the fine twins (m, 3) are taken over the coarse ones (m, 3)."""
         landing, coarse_landing = surface.nearest_points(fine)[1], surface.nearest_points(coarse)[1]
         return ((landing <= np.minimum(config.field_precision * tolerance, coarse_landing)) &
                 (np.linalg.norm(fine - coarse, axis=1) <= tolerance))[:, None]
 
     def predict(queries: np.ndarray) -> np.ndarray:
         fine, coarse = precise.predict(queries), rough.predict(queries)
-        return np.where(taken(queries, fine, coarse), fine, coarse)
+        return np.where(taken(fine, coarse), fine, coarse)
 
     def both(queries: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         (fine, fine_normals), (coarse, coarse_normals) = (precise.twins_and_normals(queries, normals),
                                                           rough.twins_and_normals(queries, normals))
-        use = taken(queries, fine, coarse)
+        use = taken(fine, coarse)
         return np.where(use, fine, coarse), np.where(use, fine_normals, coarse_normals)
 
     def carry(normals: np.ndarray, queries: np.ndarray) -> np.ndarray:
