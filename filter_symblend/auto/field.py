@@ -110,10 +110,11 @@ def tukey_weights(misfit: np.ndarray, floor: float) -> np.ndarray:
     return (1.0 - np.minimum(misfit / bound, 1.0) ** 2) ** 2
 
 
-def _ridge(matrix: np.ndarray, ridge: float) -> np.ndarray:
-    """``matrix`` (s, s) with ``ridge`` x its mean diagonal added to the diagonal (in place)."""
-    matrix[np.diag_indices(len(matrix))] += ridge * np.trace(matrix) / len(matrix)
-    return matrix
+def _ridge(matrix: np.ndarray, ridge: float) -> float:
+    """Add ``ridge`` x the mean diagonal of ``matrix`` (s, s) to its diagonal (in place); returns the amount added."""
+    amount = ridge * np.trace(matrix) / len(matrix)
+    matrix[np.diag_indices(len(matrix))] += amount
+    return amount
 
 
 def _gram(kernel: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -136,7 +137,9 @@ def fit_to_pairs(field: MirrorField, x: np.ndarray, y: np.ndarray, weights: np.n
     (c, c) solve for the three of them."""
     kernel = field.kernel(x)
     residual = y - field.reflected(x)
-    field.weights = np.linalg.solve(_ridge(_gram(kernel, weights), ridge), (kernel * weights[:, None]).T @ residual)
+    gram = _gram(kernel, weights)
+    _ridge(gram, ridge)
+    field.weights = np.linalg.solve(gram, (kernel * weights[:, None]).T @ residual)
 
 
 def robust_fit(x: np.ndarray, y: np.ndarray, centres: np.ndarray, width: float) -> MirrorField:
@@ -199,8 +202,8 @@ def register(field: MirrorField, surface, sample: np.ndarray, iterations: int, c
         matrix = blocks.reshape(matrix.shape)
         right += involution * ((image_kernel * weights[:, None]).T @ (x - field.reflected(images)))
         start = field.weights.reshape(-1) if sliding else 0.0  # what the ridge pulls the weights toward
-        ridge = RIDGE * np.trace(matrix) / len(matrix)
-        field.weights = np.linalg.solve(_ridge(matrix, RIDGE), right.reshape(-1) + ridge * start).reshape(-1, 3)
+        ridge = _ridge(matrix, RIDGE)
+        field.weights = np.linalg.solve(matrix, right.reshape(-1) + ridge * start).reshape(-1, 3)
     return field
 
 

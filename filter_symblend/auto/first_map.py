@@ -219,6 +219,11 @@ class _Search:
         return max(self.maps.values(), key=lambda mirror: self.shares[mirror.name])
 
     @property
+    def best_field(self) -> str:
+        """The name of the registered field that mirrors the most so far (there is one: ``fields`` not empty)."""
+        return max(self.fields, key=lambda name: self.shares[name])
+
+    @property
     def suffices(self) -> bool:
         """Whether the best map mirrors enough of the surface that no other could mirror much more:
         ``plane_suffices`` where a plain map mirrors ``min_coverage`` (a rigid pose, a scan) or ``plane_suffices``
@@ -288,7 +293,7 @@ def _refined_field(surface: Surface, search: _Search, config: AutoConfig, progre
     field's place: let slide, the 22 BCICP shapes chosen on kept their figures but cat4 took 8.6 -> 14.2 s); it
     takes the coarse one's place if it mirrors at least as much."""
     if search.fields:
-        name = max(search.fields, key=lambda field: search.shares[field])
+        name = search.best_field
         if progress is not None:
             progress(60.0, f"{name}, on {config.registration_samples} vertices")
         sample = _strided(surface, config.registration_samples)
@@ -360,7 +365,7 @@ def _sharpened(best: MirrorMap, search: _Search, config: AutoConfig) -> MirrorMa
     (the remeshed spot with a leg swung 0.6 rad: 99.3 -> 99.1 %), while it lands more precisely."""
     if best.name not in {mirror.name for mirror in search.intrinsics} or not search.fields:
         return best
-    sharpened = sharpened_map(search.maps[max(search.fields, key=lambda name: search.shares[name])], best, config)
+    sharpened = sharpened_map(search.maps[search.best_field], best, config)
     search.score(sharpened)
     return sharpened
 
