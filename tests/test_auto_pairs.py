@@ -596,3 +596,32 @@ def test_a_shape_with_one_mirror_plane_names_no_alternative(cow):
     assert result.report.auto_pairs.alternatives == {}
     assert result.report.auto_pairs.mirror_map.confident_share > 0.9
     assert not any("another mirror symmetry" in message for message in result.report.warnings)
+
+
+def test_a_rounds_pairs_keep_those_of_the_output_before_only_where_none_of_them_reaches(blob):
+    """The pairs of the solve before are kept where no pair of the round comes within growth.FRONTIER spacings of
+    either side (a region the round's search did not reach), and not elsewhere; the first round keeps none."""
+    from filter_symblend.auto.growth import FRONTIER
+    from filter_symblend.auto.pairs import AutomaticPairs, keeping_unreached
+    from filter_symblend.auto.surface import build_surface
+    from filter_symblend.core.surface_points import vertex_points
+    points, faces = blob
+    surface = build_surface(points, faces)
+    twin = twins(points)
+    left = np.flatnonzero((points[:, 0] > 1e-9) & (twin != np.arange(len(points))))
+    height = points[left, 2]
+    reached = left[height < np.quantile(height, 0.5)]  # the round's search paired the lower half
+    before = left[::3]  # the solve before: every third pair, over both halves
+    pairs_of = lambda vertices: AutomaticPairs(*vertex_points(vertices), *vertex_points(twin[vertices]),  # noqa: E731
+                                               np.zeros(0, dtype=np.int64), None)
+    pairs = pairs_of(reached)
+    assert keeping_unreached(pairs, None, surface) == (pairs, 0)
+    joined, carried = keeping_unreached(pairs, pairs_of(before), surface)
+    sides = np.vstack([points[reached], points[twin[reached]]])
+    gap = np.min(np.linalg.norm(points[before][:, None] - sides[None], axis=2), axis=1)
+    gap_twin = np.min(np.linalg.norm(points[twin[before]][:, None] - sides[None], axis=2), axis=1)
+    far = before[(gap > FRONTIER * surface.spacing) & (gap_twin > FRONTIER * surface.spacing)]
+    assert 0 < carried == len(far) < len(before) and np.all(points[far, 2] > np.quantile(height, 0.5))
+    np.testing.assert_array_equal(joined.left_corners[:len(reached), 0], reached)
+    np.testing.assert_array_equal(joined.left_corners[len(reached):, 0], far)
+    np.testing.assert_array_equal(joined.right_corners[len(reached):, 0], twin[far])

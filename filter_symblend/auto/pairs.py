@@ -26,6 +26,7 @@ import dataclasses
 from collections.abc import Callable
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ..core.geometry import bounding_diagonal, voxel_grid
 from ..core.landmark_pairs import LandmarkPairs, check_landmarks
@@ -34,7 +35,7 @@ from ..core.surface_points import vertex_points
 from ..errors import GeometryError
 from .config import AutoConfig
 from .connectivity import ring_consistent, tessellation_mirror
-from .growth import RATIO, grow_and_prune
+from .growth import FRONTIER, RATIO, grow_and_prune
 from .maps import MirrorMap
 from .report import PairSearch
 from .surface import Surface
@@ -45,14 +46,15 @@ from .twins import find_twins
 class AutomaticPairs:
     """Pairs found in one round, each side a point of the surface: barycentric ``left_weights`` (n, 3) on the
     vertices ``left_corners`` (n, 3), likewise ``right_weights`` and ``right_corners`` (weight 1 on one corner:
-    that vertex); midline vertices ``midline`` (m,); ``search``, what the round reports of the search."""
+    that vertex); midline vertices ``midline`` (m,); ``search``, what the round reports of the search (None: pairs
+    no search found, the intrinsic start's)."""
 
     left_corners: np.ndarray
     left_weights: np.ndarray
     right_corners: np.ndarray
     right_weights: np.ndarray
     midline: np.ndarray
-    search: PairSearch
+    search: PairSearch | None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -126,6 +128,32 @@ def search_pairs(mirror: MirrorMap, sources: np.ndarray, constraints: Constraint
         rows = np.searchsorted(sources, spread(surface.points, candidates, count))
         return AutomaticPairs(*_point_pairs(surface, sources, twins, rows), search)
     return FoundPairs(search, chosen)
+
+
+def keeping_unreached(pairs: AutomaticPairs, solved_from: AutomaticPairs | None,
+                      surface: Surface) -> tuple[AutomaticPairs, int]:
+    """(``pairs`` with the pairs of ``solved_from`` that none of them comes near, how many those are): both sides
+    farther than growth.FRONTIER x the vertex spacing from every side of ``pairs`` on ``surface`` (the input).
+    ``solved_from``: the pairs the current output was solved from (None: none, the first round of a map of
+    space). Each round solves on the input, so a region its search does not reach would fall back to its input
+    pose: a swung limb the intrinsic start's pairs restored, which the exact vertex growth of the next round
+    does not enter where the joint turns faster than a local affine map follows. It keeps the pairs that
+    restored it instead."""
+    if solved_from is None or not len(solved_from.left_corners):
+        return pairs, 0
+
+    def sides(found: AutomaticPairs) -> list[np.ndarray]:
+        return [np.einsum("nk,nki->ni", weights, surface.points[corners])
+                for corners, weights in ((found.left_corners, found.left_weights),
+                                         (found.right_corners, found.right_weights))]
+    near = cKDTree(np.vstack([*sides(pairs), surface.points[pairs.midline]]))
+    reach = FRONTIER * surface.spacing
+    far = np.logical_and(*(near.query(side)[0] > reach for side in sides(solved_from)))
+    if not far.any():
+        return pairs, 0
+    joined = {name: np.vstack([getattr(pairs, name), getattr(solved_from, name)[far]])
+              for name in ("left_corners", "left_weights", "right_corners", "right_weights")}
+    return dataclasses.replace(pairs, **joined), int(np.count_nonzero(far))
 
 
 def _point_pairs(surface: Surface, sources: np.ndarray, twins, rows: np.ndarray):

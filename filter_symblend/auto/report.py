@@ -53,8 +53,9 @@ class Round:
     diagonal). A start records only that and where it came from (``start``: "landmarks" or "intrinsic");
     a round adds its pair ``search``, the automatic ``pairs`` and ``midline`` vertices it used, the largest
     ``change`` of a vertex from the output before (/ diagonal), whether it was ``kept`` (a round that left
-    the output less symmetric is not), whether it is the ``final`` solve with every pair, and the widths
-    it had to raise (``raised_widths``: name -> value)."""
+    the output less symmetric is not), whether it is the ``final`` solve with every pair, the widths
+    it had to raise (``raised_widths``: name -> value), and how many of its pairs it ``carried`` over from the
+    solve before, where its own search did not reach (:func:`.pairs.keeping_unreached`)."""
 
     surface_asymmetry: float
     start: str | None = None
@@ -65,6 +66,7 @@ class Round:
     kept: bool = True
     final: bool = False
     raised_widths: dict[str, float] = dataclasses.field(default_factory=dict)
+    carried: int = 0
 
     @property
     def is_start(self) -> bool:
@@ -77,6 +79,8 @@ class Round:
                "surface_asymmetry": self.surface_asymmetry, **self.raised_widths}
         if self.change is not None:
             out["change"] = self.change
+        if self.carried:
+            out["carried"] = self.carried
         if not self.kept:
             out["kept"] = False
         if self.final:

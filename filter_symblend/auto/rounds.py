@@ -5,9 +5,11 @@ landmarks, the landmarks' solve and a field registered on its output). When no m
 surface, ``mode='articulated'`` starts from the solve of the intrinsic mirror's own vertex pairs
 (:mod:`.intrinsic_start`: a posed body) and maps its output; other modes refuse. Each round pairs a
 spread sample under the current map (:mod:`.pairs`) and solves, with the same checks and solve as a
-user's landmarks, on the input. Where the map left part of the surface without twins (a strong bend with a
-compression, a shape only partly mirrored by the first map), the output is more symmetric than the
-input, so the next map is a field registered on the output, from its own plane, and pairs more of it.
+user's landmarks, on the input, with the pairs the output before was solved from wherever the round's own
+pairs do not reach (:func:`.pairs.keeping_unreached`: a limb the intrinsic start restored, which the next
+round's exact vertex growth does not enter). Where the map left part of the surface without twins (a strong
+bend with a compression, a shape only partly mirrored by the first map), the output is more symmetric than
+the input, so the next map is a field registered on the output, from its own plane, and pairs more of it.
 The rounds stop when the map pairs ``plane_suffices`` of the sample, when the output no longer moves,
 or when a round leaves it less mirror-symmetric than the one before (that round is not kept). A round
 whose map pairs ``plane_suffices`` of the sample is the last and takes ``auto_pair_count`` pairs at once;
@@ -30,6 +32,7 @@ from ..core.geometry import reflection_across_plane
 from ..core.landmark_asymmetry import fit_mirror_plane
 from ..core.landmark_pairs import LandmarkPairs, check_landmarks
 from ..core.solve import SymmetrizationResult, scaled_progress, solve
+from ..core.surface_points import vertex_points
 from ..errors import (DegenerateNeighbourhoodError, DisconnectedPairsError, GeometryError, SymblendError,
                       SymblendWarning, SymmetryNotFoundError)
 from ..parameters import CORE, options_of
@@ -40,7 +43,7 @@ from .first_map import TESSELLATION, coverage, first_map, intrinsic_mirror_map
 from .intrinsic_map import intrinsic_vertex_map
 from .intrinsic_start import cannot_start, intrinsic_start
 from .maps import MirrorMap, field_map, pairs_map, plane_map
-from .pairs import Constraints, FoundPairs, as_landmarks, search_pairs, spread
+from .pairs import AutomaticPairs, Constraints, FoundPairs, as_landmarks, keeping_unreached, search_pairs, spread
 from .report import AutomaticPairsReport, Round
 from .rivals import rival_warning
 from .surface import Outline, Surface, build_surface
@@ -136,24 +139,29 @@ INTRINSIC_START_WARNING = (
 
 
 def _intrinsic_first_output(points, surface, core, scored, config, refusal, progress):
-    """The output of the intrinsic mirror's vertex pairs (:mod:`.intrinsic_start`) and what was tried: when no
-    map mirrors enough of the surface (``refusal``), the refusal, with the reason, if they give none; asked for
-    (``refusal`` None), a None output then."""
+    """The output of the intrinsic mirror's vertex pairs (:mod:`.intrinsic_start`), what was tried, and the pairs
+    solved (:class:`.pairs.AutomaticPairs`, None with no output): when no map mirrors enough of the surface
+    (``refusal``), the refusal, with the reason, if they give none; asked for (``refusal`` None), a None output
+    then."""
     if progress is not None:
         progress(10.0, "no map mirrors enough of the surface: the intrinsic mirror's own pairs")
+    solved = []
 
     def solve_pairs(left, right):
         ones = np.ones(len(left))
         checked = check_landmarks(points, left, right, np.arange(1, len(left) + 1), None, ones, ones)
-        return _solve_widening(points, checked, core, None, 0)[0]
+        output = _solve_widening(points, checked, core, None, 0)[0]
+        solved.append(AutomaticPairs(*vertex_points(left), *vertex_points(right), np.zeros(0, dtype=np.int64), None))
+        return output
 
     result, tried = intrinsic_start(surface, config, solve_pairs, lambda out: surface_asymmetry(surface, out, scored))
+    pairs = solved[-1] if result is not None else None
     if refusal is None:
-        return result, tried
+        return result, tried, pairs
     if result is None:
         raise _refusal_saying(refusal, cannot_start(tried)) from None
     tried["refused_maps"] = str(refusal)
-    return result, tried
+    return result, tried, pairs
 
 
 def solve_with_automatic_pairs(points: np.ndarray, faces: np.ndarray, options: dict,
@@ -246,6 +254,7 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
     registration = spread(points, surface.usable_index, config.registration_samples)
     origin = {}  # how the rounds started: the first map's coverage and plane, or the intrinsic start
     history, messages, rivals = [], [], []
+    solved_from = None  # the pairs the current output was solved from (the intrinsic start's, or a kept round's)
     intrinsic = None  # the intrinsic mirror, where computed: the twin of a vertex where it has more evidence
     refusal = None  # no map of space mirrors enough of the surface (in articulated mode: the intrinsic start)
     if landmarks is None and start == "maps":
@@ -263,7 +272,7 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
                                                "mirror.") from None
             refusal = refused
     if landmarks is None and (start == "intrinsic" or refusal is not None):
-        result, tried = _intrinsic_first_output(points, surface, core, scored, config, refusal, progress)
+        result, tried, solved_from = _intrinsic_first_output(points, surface, core, scored, config, refusal, progress)
         if result is None:  # only when asked for: after a refusal it raises
             return None
         origin = {"intrinsic_start": tried}
@@ -287,11 +296,12 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
     constraints = Constraints(surface, landmarks, forbidden, config)
 
     def attempt(mirror: MirrorMap, pairs_wanted: int, start: float, found: FoundPairs | None = None):
-        """The solve of ``pairs_wanted`` pairs under ``mirror`` (``found``: its search, if made before), its
-        round's entry and the search."""
+        """The solve of ``pairs_wanted`` pairs under ``mirror`` (``found``: its search, if made before) with those
+        of the output before where they do not reach (:func:`.pairs.keeping_unreached`), its round's entry, the
+        search and the pairs solved."""
         nonlocal exact_twins
         found = search_pairs(mirror, sample, constraints, exact_twins) if found is None else found
-        pairs = found.chosen(pairs_wanted)
+        pairs, carried = keeping_unreached(found.chosen(pairs_wanted), solved_from, surface)
         exact_twins = pairs.search.twins_are == "exact vertices"
         solved, checked = as_landmarks(points, pairs, landmarks, options["landmark_priority"], config.coincident)
         candidate, solve_options = _solve_widening(solved, checked, core, scaled_progress(progress, start, step),
@@ -300,8 +310,8 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
         entry = Round(surface_asymmetry(surface, candidate, scored), search=pairs.search,
                       pairs=int(len(checked.left) - given[0]), midline=int(len(checked.midline) - given[1]),
                       raised_widths={width: solve_options[width] for width in ("phi_width", "theta_width")
-                                     if solve_options[width] != core[width]})
-        return candidate, entry, found
+                                     if solve_options[width] != core[width]}, carried=carried)
+        return candidate, entry, found, pairs
 
     stopped, source, source_found, solved_with = "round limit", mirror, None, 0
     for index in range(rounds_allowed):
@@ -311,7 +321,7 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
         found = search_pairs(mirror, sample, constraints, exact_twins)
         # A round whose map pairs plane_suffices of the sample is the last: it takes all the pairs at once.
         wanted = count if found.search.share_paired >= config.plane_suffices else round_count
-        candidate, entry, found = attempt(mirror, wanted, begin, found)
+        candidate, entry, found, pairs = attempt(mirror, wanted, begin, found)
         previous = points if result is None else result.points  # round 1 of 'auto': against the input itself
         entry = dataclasses.replace(entry, change=float(np.abs(candidate.points - previous).max() / surface.diagonal))
         if entry.surface_asymmetry > best * (1.0 + 1e-9):
@@ -321,6 +331,7 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
         history.append(entry)
         gain = 1.0 - entry.surface_asymmetry / best if np.isfinite(best) and best > 0 else 1.0
         result, best, source, source_found, solved_with = candidate, entry.surface_asymmetry, mirror, found, wanted
+        solved_from = pairs
         if entry.change < CONVERGED_CHANGE:
             stopped = "converged"
             break
@@ -335,7 +346,7 @@ def _paired(points: np.ndarray, surface: Surface, forbidden: np.ndarray, exclude
         # The rounds found the twins with fewer pairs; the output is solved with all of them.
         if progress is not None:
             progress(30.0 + rounds_allowed * step, f"automatic pairs: the solve with {count} pairs")
-        candidate, entry, _ = attempt(source, count, 30.0 + rounds_allowed * step, source_found)
+        candidate, entry, _, _ = attempt(source, count, 30.0 + rounds_allowed * step, source_found)
         better = entry.surface_asymmetry <= best * (1.0 + 1e-9)  # as a round: one less symmetric is not kept
         history.append(dataclasses.replace(entry, final=True, kept=better))
         if better:
