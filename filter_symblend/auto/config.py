@@ -59,7 +59,8 @@ class AutoConfig:
     local_neighbours: int = _field(
         12, "pairs",
         "pairs fitting each local affine mirror map: the fewest that determine an affine map (4) with "
-        "room for noise, few enough to stay local")
+        "room for noise, few enough to stay local (the growth of exact vertex pairs, which carry no noise, "
+        "fits growth.GROWTH_NEIGHBOURS)")
     vertex_share: float = _field(
         0.75, "share of the usable vertices",
         "the vertices are taken to mirror each other when the exact-vertex growth pairs this share of them, "

@@ -38,6 +38,13 @@ FRONTIER = 3.0
 # Pull of each local affine mirror map toward its best improper rigid map, x the neighbourhood's spread:
 # keeps a map of a nearly flat patch determined without stiffening a curved one.
 LOCAL_MAP_RIDGE = 0.05
+# Pairs each local map of a growth wave is fitted to: exact vertex pairs carry no noise, so fewer than the
+# ``config.local_neighbours`` of the other local maps (whose pairs may be a vertex off) keep a map local enough to
+# follow a joint that turns fast, still twice the four that determine an affine map. Measured (--corpus): the exact
+# cow's leg swung 0.3 rad 0.60x -> 0.34x the error of 100 landmark pairs (0.6 rad 0.93x -> 0.96x, its 90th
+# percentile 0.016 -> 0.010 %), Figure 1's cow 0.085x -> 0.083x, every other row the same; the 40 BCICP shapes the
+# same but michael0 0.98x -> 0.97x and wolf2 1.61x -> 1.59x (docs/benchmarks.md).
+GROWTH_NEIGHBOURS = 8
 # Prune-and-grow passes at most: each removes what the one before grew wrong, and none was needed beyond
 # the third.
 PASSES = 4
@@ -122,7 +129,7 @@ def grow(surface: Surface, partner: np.ndarray, eligible: np.ndarray, twins: np.
         sources = sources[~failed[sources]]
         if not len(sources):
             return waves
-        k = min(config.local_neighbours, len(paired))
+        k = min(GROWTH_NEIGHBOURS, len(paired))
         predicted, rigid, source_reach = _local_maps(points, partner, points[sources], paired, tree, k)
         vertex, _, ratio = surface.nearest_vertices(predicted)
         ok = (ratio <= RATIO) & (partner[vertex] < 0) & twins[vertex] & ((vertex != sources) | own_twin[sources])
@@ -139,7 +146,7 @@ def grow(surface: Surface, partner: np.ndarray, eligible: np.ndarray, twins: np.
             return waves
         partner[sources], partner[vertex] = vertex, sources
         waves += 1
-        if k < config.local_neighbours:  # every pair is in every map: a new one changes them all
+        if k < GROWTH_NEIGHBOURS:  # every pair is in every map: a new one changes them all
             failed[:] = False
             continue
         waiting = np.flatnonzero(failed)
