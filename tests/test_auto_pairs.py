@@ -616,7 +616,8 @@ def test_a_rounds_pairs_keep_those_of_the_output_before_only_where_none_of_them_
     pairs_of = lambda vertices: AutomaticPairs(*vertex_points(vertices), *vertex_points(twin[vertices]),  # noqa: E731
                                                np.zeros(0, dtype=np.int64), None)
     pairs = pairs_of(reached)
-    assert keeping_unreached(pairs, None, surface) == (pairs, 0)
+    unchanged, none = keeping_unreached(pairs, None, surface)
+    assert unchanged is pairs and none == 0
     joined, carried = keeping_unreached(pairs, pairs_of(before), surface)
     sides = np.vstack([points[reached], points[twin[reached]]])
     gap = np.min(np.linalg.norm(points[before][:, None] - sides[None], axis=2), axis=1)
