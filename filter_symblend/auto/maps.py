@@ -132,10 +132,14 @@ def sharpened_map(precise: MirrorMap, rough: MirrorMap, config: AutoConfig) -> M
     tolerance = config.landing_tolerance * surface.diagonal
 
     def taken(fine: np.ndarray, coarse: np.ndarray) -> np.ndarray:
-        """(m, 1) bool: where the fine twins (m, 3) are taken over the coarse ones (m, 3)."""
-        landing, coarse_landing = surface.nearest_points(fine)[1], surface.nearest_points(coarse)[1]
-        return ((landing <= np.minimum(config.field_precision * tolerance, coarse_landing)) &
-                (np.linalg.norm(fine - coarse, axis=1) <= tolerance))[:, None]
+        """(m, 1) bool: where the fine twins (m, 3) are taken over the coarse ones (m, 3); the coarse ones' landing
+        is measured only where the fine ones pass the other two tests."""
+        landing = surface.nearest_points(fine)[1]
+        use = (landing <= config.field_precision * tolerance) & (np.linalg.norm(fine - coarse, axis=1) <= tolerance)
+        rows = np.flatnonzero(use)
+        if len(rows):
+            use[rows] = landing[rows] <= surface.nearest_points(coarse[rows])[1]
+        return use[:, None]
 
     def predict(queries: np.ndarray) -> np.ndarray:
         fine, coarse = precise.predict(queries), rough.predict(queries)
