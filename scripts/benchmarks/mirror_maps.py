@@ -94,9 +94,22 @@ class Dataset:
 
 
 def find_dataset(path: str | None) -> Dataset | None:
-    for candidate in (path, os.environ.get("BCICP_DATASET"), SNAPSHOT):
-        if candidate and pathlib.Path(candidate).exists():
-            return Dataset(pathlib.Path(candidate))
+    """The dataset at ``path``, else at $BCICP_DATASET, else at SNAPSHOT; None when none is given and SNAPSHOT is
+    absent. Each may be an unpacked copy (holding ``Dataset/``), a git snapshot, or the directory the tool library's
+    fetch made (holding the snapshot as ``repo/``). Raises ValueError naming a path given that holds none of them."""
+    for candidate, given in ((path, True), (os.environ.get("BCICP_DATASET"), True), (str(SNAPSHOT), False)):
+        if not candidate:
+            continue
+        root = pathlib.Path(candidate)
+        if (root / "repo" / "HEAD").exists() and not (root / "Dataset").exists():
+            root = root / "repo"
+        if (root / "HEAD").exists() or (root / "Dataset").exists():
+            return Dataset(root)
+        if given:
+            source = "--bcicp" if candidate == path else "$BCICP_DATASET"
+            raise ValueError(f"{source} = {candidate} holds no BCICP dataset: give an unpacked copy of "
+                             "llorz/SGA18_orientation_BCICP_dataset (the folder holding Dataset/) or its git snapshot "
+                             "(the folder holding HEAD, or the one holding it as repo/).")
     return None
 
 
@@ -207,8 +220,11 @@ def summary(errors: np.ndarray) -> str:
 
 
 def mirror_maps_main(args) -> None:
-    dataset = find_dataset(args.bcicp)
     print("## The mirror map against the BCICP dataset's ground-truth self-symmetry\n")
+    try:
+        dataset = find_dataset(args.bcicp)
+    except ValueError as error:
+        raise SystemExit(f"error: {error}") from None
     if dataset is None:
         print(f"skipped: the BCICP dataset is absent (fetch llorz/SGA18_orientation_BCICP_dataset; --bcicp PATH or "
               f"$BCICP_DATASET, default {SNAPSHOT})")
