@@ -165,3 +165,15 @@ def test_the_fill_runs_on_arrays_as_in_the_filter_and_in_either_frame(cow):
         symmetrize(bumped, left, right, faces=cow.faces, missing_faces=np.zeros(len(cow.faces), bool))
     with pytest.raises(ParameterError, match=r"`missing_faces` needs one bool per face"):
         symmetrize(bumped, left, right, faces=cow.faces, missing=missing, missing_faces=[True])
+
+
+def test_a_surface_point_from_its_barycentric_weights_is_that_point_of_its_triangle():
+    from filter_symblend.core.surface_points import barycentric, on_surface, vertex_points
+    rng = np.random.default_rng(3)
+    points = rng.normal(size=(10, 3))
+    corners = np.array([[0, 1, 2], [3, 4, 5], [7, 8, 9]])
+    weights = rng.dirichlet(np.ones(3), size=3)
+    expected = np.array([w @ points[c] for c, w in zip(corners, weights)])
+    np.testing.assert_allclose(on_surface(points, corners, weights), expected, atol=1e-14)
+    np.testing.assert_allclose(barycentric(points[corners], expected), weights, atol=1e-12)  # and back
+    np.testing.assert_array_equal(on_surface(points, *vertex_points(np.array([6, 2]))), points[[6, 2]])

@@ -33,6 +33,7 @@ from scipy.spatial import cKDTree
 
 from ..core.mirror_pairs import CONFIDENT, DOUBTFUL_SHARE, MirrorPairs
 from ..core.report import MirrorMapReport
+from ..core.surface_points import on_surface
 from .config import AutoConfig
 from .growth import LOCAL_MAP_RIDGE, affine_mirror_maps
 from .maps import MirrorMap
@@ -114,7 +115,7 @@ def _candidate(mirror: MirrorMap, geometry: Surface, sources: np.ndarray, forbid
     exact = twins.exact_vertex()
     corners[exact] = twins.vertex[exact, None]
     weights[exact] = [1.0, 0.0, 0.0]
-    point = np.einsum("kj,kji->ki", weights, geometry.points[corners])
+    point = on_surface(geometry.points, corners, weights)
     confidence = _confidence(errors, geometry, sources, point, rivals)
     return _Candidate(listed, supported, corners, weights, point, errors, np.where(supported, confidence, 0.0),
                       twins.landing <= tolerance)

@@ -31,7 +31,7 @@ from scipy.spatial import cKDTree
 from ..core.geometry import bounding_diagonal, voxel_grid
 from ..core.landmark_pairs import LandmarkPairs, check_landmarks
 from ..core.mesh_graph import one_pair_per_vertex
-from ..core.surface_points import vertex_points
+from ..core.surface_points import on_surface, vertex_points
 from ..errors import GeometryError
 from .config import AutoConfig
 from .connectivity import ring_consistent, tessellation_mirror
@@ -143,7 +143,7 @@ def keeping_unreached(pairs: AutomaticPairs, solved_from: AutomaticPairs | None,
         return pairs, 0
 
     def sides(found: AutomaticPairs) -> list[np.ndarray]:
-        return [np.einsum("nk,nki->ni", weights, surface.points[corners])
+        return [on_surface(surface.points, corners, weights)
                 for corners, weights in ((found.left_corners, found.left_weights),
                                          (found.right_corners, found.right_weights))]
     near = cKDTree(np.vstack([*sides(pairs), surface.points[pairs.midline]]))
@@ -242,7 +242,7 @@ def _on_points(points: np.ndarray, corners: np.ndarray, weights: np.ndarray, fir
     inside = np.flatnonzero(~on_vertex)
     index = corners[np.arange(len(corners)), np.argmax(weights, axis=1)]
     index[inside] = first + np.arange(len(inside))
-    return index, np.einsum("kj,kji->ki", weights[inside], points[corners[inside]])
+    return index, on_surface(points, corners[inside], weights[inside])
 
 
 def as_landmarks(points: np.ndarray, pairs: AutomaticPairs, user: LandmarkPairs | None,

@@ -14,6 +14,7 @@ import numpy as np
 from .geometry import bounding_diagonal
 from .mesh_quantities import farthest_point_order
 from .report import MirrorMapReport
+from .surface_points import on_surface
 
 CONFIDENT = 0.5  # a twin at or above this confidence counts as confident (see auto/confidence)
 APART = 0.02  # x diagonal: a landmark pair closer than this says little about the mirror and snaps ambiguously
@@ -39,7 +40,7 @@ class MirrorPairs:
 
     def twins_on(self, points: np.ndarray) -> np.ndarray:
         """(k, 3): the twins on another embedding ``points`` (N, 3) of the same mesh."""
-        return np.einsum("kj,kji->ki", self.weights, np.asarray(points, dtype=float)[self.corners])
+        return on_surface(points, self.corners, self.weights)
 
     def per_vertex(self, points: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(twin (N, 3), NaN where a vertex has none; confidence (N,), 0 where none), on ``points``

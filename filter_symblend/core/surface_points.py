@@ -1,5 +1,5 @@
-"""Points of a triangle surface as corners and barycentric weights: a vertex as such a point, and the
-weights of points that lie on given triangles."""
+"""Points of a triangle surface as corners and barycentric weights: a vertex as such a point, such a point's
+position, and the weights of points that lie on given triangles."""
 
 from __future__ import annotations
 
@@ -12,6 +12,12 @@ def vertex_points(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     weights = np.zeros((len(vertices), 3))
     weights[:, 0] = 1.0
     return np.repeat(vertices[:, None], 3, axis=1), weights
+
+
+def on_surface(points: np.ndarray, corners: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """(k, 3): the points at ``corners`` (k, 3) with barycentric ``weights`` (k, 3) on the vertex positions
+    ``points`` (N, 3)."""
+    return np.einsum("kj,kji->ki", weights, np.asarray(points, dtype=float)[corners])
 
 
 def barycentric(corners: np.ndarray, points: np.ndarray) -> np.ndarray:

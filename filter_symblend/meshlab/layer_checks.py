@@ -9,7 +9,7 @@ import pymeshlab
 from scipy.spatial import cKDTree
 
 from ..core.mirror_fill import TriangleSurface
-from ..core.surface_points import barycentric
+from ..core.surface_points import barycentric, on_surface
 from ..errors import LandmarkError
 from ..measures.hausdorff import two_way_distance
 from ..measures.surface_asymmetry import CHECK_SAMPLES, before_and_after, pairs_plane
@@ -61,9 +61,9 @@ def _on_input(twins: np.ndarray, moved: np.ndarray, points: np.ndarray, faces: n
     nearest vertex instead without triangles)."""
     if not len(faces):
         return points[cKDTree(moved).query(twins)[1]]
-    face, on_surface, _ = TriangleSurface(moved, faces).nearest(twins)
-    weights = barycentric(moved[faces[face]], on_surface)
-    return np.einsum("kj,kji->ki", weights, points[faces[face]])
+    face, closest, _ = TriangleSurface(moved, faces).nearest(twins)
+    weights = barycentric(moved[faces[face]], closest)
+    return on_surface(points, faces[face], weights)
 
 
 def _point_attribute(mesh: pymeshlab.Mesh, name: str) -> np.ndarray | None:

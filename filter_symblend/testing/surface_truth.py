@@ -12,7 +12,7 @@ from scipy.spatial import cKDTree
 from ..core.landmark_asymmetry import fit_mirror_plane
 from ..core.mesh_quantities import farthest_point_order
 from ..core.mirror_fill import TriangleSurface
-from ..core.surface_points import barycentric, vertex_points
+from ..core.surface_points import barycentric, on_surface, vertex_points
 
 
 @dataclasses.dataclass(frozen=True)
@@ -30,7 +30,7 @@ class SurfaceTruth:
 
     def twins(self, points: np.ndarray) -> np.ndarray:
         """(m, 3) the twins of the ``left`` vertices on the mesh moved to ``points`` (N, 3)."""
-        return np.einsum("mk,mki->mi", self.twin_weights, points[self.twin_corners])
+        return on_surface(points, self.twin_corners, self.twin_weights)
 
     def symmetry_error(self, points: np.ndarray) -> float:
         """RMS over the true pairs of |left - mirror(twin)| across their best plane, / diagonal of ``points``."""
