@@ -490,3 +490,22 @@ def test_the_symmetric_weights_equal_scipys_conversion_with_few_and_with_more_th
     assert built.nnz == expected.nnz == 2 * len(i) + n
     assert abs(built - expected).max() == 0.0
     assert np.array_equal(built.indptr, expected.indptr)
+
+
+def test_farthest_point_sampling_on_many_points_is_the_plain_definition(monkeypatch):
+    """On LOCAL_FROM points or more the later sweeps visit only what a k-d tree finds near the new sample; the
+    samples are those of the definition: each the point farthest from all before it."""
+    from scipy.spatial import cKDTree
+    from filter_symblend.core import mesh_quantities
+    trees = []
+    monkeypatch.setattr(mesh_quantities, "cKDTree", lambda points: trees.append(points) or cKDTree(points))
+    rng = np.random.default_rng(8)
+    points = rng.normal(size=(mesh_quantities.LOCAL_FROM + 2000, 3)) * [3.0, 1.0, 0.2]
+    chosen = mesh_quantities.farthest_point_order(points, 400, start=5)
+    nearest = np.linalg.norm(points - points[5], axis=1)
+    expected = [5]
+    for _ in range(399):
+        expected.append(int(np.argmax(nearest)))
+        nearest = np.minimum(nearest, np.linalg.norm(points - points[expected[-1]], axis=1))
+    np.testing.assert_array_equal(chosen, expected)
+    assert len(trees) == 1, "the later sweeps must have gone through the tree"

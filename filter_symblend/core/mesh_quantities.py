@@ -40,6 +40,15 @@ def mean_spacing(points: np.ndarray, faces: np.ndarray) -> float:
     return mean_nearest_spacing(points)
 
 
+# A farthest-point sweep changes only the points nearer the new sample than to any before, all within the largest
+# such distance, which only shrinks: once a sweep changes fewer than 1/LOCAL_SWEEPS of the points, each later one
+# visits only the points a k-d tree finds within it, on LOCAL_FROM points or more (a query costs about what a sweep
+# of 10,000 points does). The same samples; 6,000 of 2 x 10^5 landmarks 2.4 -> 0.7 s, 1,000 of 30,000 0.067 ->
+# 0.050 s; 1,500 of 5,000 would take 0.028 -> 0.034 s.
+LOCAL_SWEEPS = 32
+LOCAL_FROM = 10_000
+
+
 def farthest_point_order(points: np.ndarray, count: int, start: int | None = None) -> np.ndarray:
     """Indices (count,) into ``points`` (n, 3) by farthest-point sampling from index ``start``
     (default: the point nearest the centroid, a start that does not depend on the vertex order); none for
@@ -53,20 +62,30 @@ def farthest_point_order(points: np.ndarray, count: int, start: int | None = Non
     coordinates = np.array(points, dtype=float).T.copy()  # (3, n): contiguous rows are faster to sweep
     distance, step = np.empty(len(points)), np.empty(len(points))
 
-    def squared_distances(index: int, out: np.ndarray) -> np.ndarray:  # same order as distances
-        np.subtract(coordinates[0], coordinates[0, index], out=out)
+    def squared_distances(index: int, out: np.ndarray, where=slice(None)) -> np.ndarray:  # same order as distances
+        np.subtract(coordinates[0, where], coordinates[0, index], out=out)
         np.multiply(out, out, out=out)
         for axis in (1, 2):
-            np.subtract(coordinates[axis], coordinates[axis, index], out=step)
-            np.multiply(step, step, out=step)
-            np.add(out, step, out=out)
+            np.subtract(coordinates[axis, where], coordinates[axis, index], out=step[:len(out)])
+            np.multiply(step[:len(out)], step[:len(out)], out=step[:len(out)])
+            np.add(out, step[:len(out)], out=out)
         return out
 
     squared_distances(start, distance)
     change = np.empty(len(points))
+    tree = None
     for k in range(1, count):
         chosen[k] = np.argmax(distance)
-        np.minimum(distance, squared_distances(chosen[k], change), out=distance)
+        if tree is None:
+            squared_distances(chosen[k], change)
+            if len(points) >= LOCAL_FROM and k + 1 < count and \
+                    np.count_nonzero(change < distance) * LOCAL_SWEEPS < len(points):
+                tree = cKDTree(points)
+            np.minimum(distance, change, out=distance)
+        else:  # the points within the largest distance (a hair beyond it: the tree rounds its own way)
+            near = np.asarray(tree.query_ball_point(points[chosen[k]], np.sqrt(distance[chosen[k]]) * (1.0 + 1e-9)),
+                              dtype=np.int64)
+            distance[near] = np.minimum(distance[near], squared_distances(chosen[k], np.empty(len(near)), near))
     return chosen
 
 
