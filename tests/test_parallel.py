@@ -46,15 +46,22 @@ def test_an_error_beside_is_raised_to_the_caller_and_blas_is_restored():
     assert _blas_threads() == before
 
 
-def test_the_product_by_row_blocks_equals_the_whole_matrixs_and_shares_its_storage():
+def test_the_product_by_row_blocks_equals_the_whole_matrixs_and_shares_its_storage(monkeypatch):
     """The global solve's product, its rows cut into one block per core: the same values as scipy's product
-    (rows of very different lengths, an empty one), and the blocks are views of the matrix, not copies."""
+    (rows of very different lengths, an empty one), and the blocks are views of the matrix, not copies; below
+    THREADED_NONZEROS, scipy's product itself, in this thread."""
+    from filter_symblend.core import parallel
     rng = np.random.default_rng(2)
     emptied = np.ones(2960)
     emptied[100] = 0.0  # an empty row
     sparse_rows = sp.diags(emptied) @ sp.random(2960, 3000, density=0.01, format="csr", random_state=3)
     matrix = sp.csr_matrix(sp.vstack([rng.normal(size=(40, 3000)), sparse_rows]))  # a few dense rows first
     vectors = rng.normal(size=(3000, 3))
+    assert matrix.nnz < parallel.THREADED_NONZEROS
+    direct = row_blocks(matrix)
+    np.testing.assert_array_equal(direct(vectors), matrix @ vectors)
+    assert not any(isinstance(cell.cell_contents, list) for cell in direct.__closure__ or ())  # no blocks
+    monkeypatch.setattr(parallel, "THREADED_NONZEROS", 0)
     product = row_blocks(matrix)
     np.testing.assert_allclose(product(vectors), matrix @ vectors, rtol=1e-12, atol=1e-12)
     cells = product.__closure__  # the blocks the product holds

@@ -96,10 +96,18 @@ def _row_block(matrix: sp.csr_matrix, start: int, end: int) -> sp.csr_matrix:
     return block
 
 
+# Below this many nonzeros a product in the caller's thread is faster than one split over the cores (pair weights
+# on 2 cores, 3 and 12 columns: 0.3 against 0.7 ms at 9 x 10^4, 3.4 against 4.0 ms at 10^6, 7.7 against 6.8 ms and
+# 8.0 against 5.0 ms at 2.3 x 10^6).
+THREADED_NONZEROS = 2**20
+
+
 def row_blocks(matrix: sp.csr_matrix) -> Callable[[np.ndarray], np.ndarray]:
-    """``v -> matrix @ v`` with the rows cut into one block of equal nonzeros per core. Measured
-    on 2 cores: 1.9x faster on a random 10^5 x 10^5 matrix with 295 nonzeros per row, but only
-    1.08x in the global solve at 10^5 pairs, which memory bandwidth bounds."""
+    """``v -> matrix @ v`` with the rows cut into one block of equal nonzeros per core (in this thread below
+    THREADED_NONZEROS). Measured on 2 cores: 1.9x faster on a random 10^5 x 10^5 matrix with 295 nonzeros per row,
+    but only 1.08x in the global solve at 10^5 pairs, which memory bandwidth bounds."""
+    if matrix.nnz < THREADED_NONZEROS:
+        return lambda vectors: matrix @ vectors
     bounds = np.searchsorted(matrix.indptr, np.linspace(0, matrix.nnz, WORKERS + 1)).clip(0, matrix.shape[0])
     bounds[0], bounds[-1] = 0, matrix.shape[0]
     blocks = [(a, b, _row_block(matrix, a, b)) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
