@@ -63,12 +63,13 @@ def farthest_point_order(points: np.ndarray, count: int, start: int | None = Non
     distance, step = np.empty(len(points)), np.empty(len(points))
 
     def squared_distances(index: int, out: np.ndarray, where=slice(None)) -> np.ndarray:  # same order as distances
+        scratch = step[:len(out)]
         np.subtract(coordinates[0, where], coordinates[0, index], out=out)
         np.multiply(out, out, out=out)
         for axis in (1, 2):
-            np.subtract(coordinates[axis, where], coordinates[axis, index], out=step[:len(out)])
-            np.multiply(step[:len(out)], step[:len(out)], out=step[:len(out)])
-            np.add(out, step[:len(out)], out=out)
+            np.subtract(coordinates[axis, where], coordinates[axis, index], out=scratch)
+            np.multiply(scratch, scratch, out=scratch)
+            np.add(out, scratch, out=out)
         return out
 
     squared_distances(start, distance)
